@@ -1,0 +1,16 @@
+"""moorjax: differentiable mooring-line dynamics on JAX.
+
+Importing moorjax enables JAX's float64 mode (``jax_enable_x64``): mooring
+simulation needs it (positions ~100 m resolved to µm, tensions ~1 MN with
+Newton tolerances of ~1e-8 relative). Import moorjax before creating arrays that
+should be float64.
+
+Units are SI throughout; z is up with z = 0 at the free surface.
+"""
+
+import jax as _jax
+
+_jax.config.update("jax_enable_x64", True)
+
+from .model import *  # noqa: E402,F401,F403
+from .model import __all__ as _model_all  # noqa: E402,F401

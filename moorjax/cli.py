@@ -1,0 +1,197 @@
+"""The ``moorjax`` command line: statics and simulation of MoorDyn decks.
+
+    moorjax statics DECK [--segments N] [--json]
+    moorjax simulate DECK --duration T [--motion MOTION.csv] [--segments N]
+        [--solver NAME] [--rtol R] [--atol A] [--dt DT] [--dt-out 0.05]
+        --out OUT.csv [--stats]
+    moorjax examples
+
+DECK is a MoorDyn v2 input file or ``example:NAME`` for a bundled deck.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+
+import numpy as np
+
+
+def _deck_path(arg: str) -> str:
+    if arg.startswith("example:"):
+        from .examples import example_path
+
+        return example_path(arg.split(":", 1)[1])
+    return arg
+
+
+def _load(args, motion_path=None):
+    from .io import build_scene, coupled_point_ids, read_deck, read_motion
+
+    deck = read_deck(_deck_path(args.deck))
+    motion = None
+    if motion_path is not None:
+        motion = read_motion(motion_path, coupled_point_ids(deck))
+    return deck, build_scene(deck, segments=args.segments, motion=motion), motion
+
+
+def cmd_statics(args) -> int:
+    import jax
+
+    from .statics import solve_line_statics
+
+    _, scene, _ = _load(args)
+    rows = []
+    for line in scene.lines:
+        st = solve_line_statics(line, scene.env, throw=False)
+        st = jax.device_get(st)
+        if not bool(st.converged):
+            raise RuntimeError(
+                f"line {line.label}: static solve did not converge "
+                f"(max force imbalance {float(st.max_residual):.3g} N after "
+                f"{int(st.iterations)} Newton iterations)"
+            )
+        rows.append(
+            dict(
+                id=int(line.label) if line.label.isdigit() else line.label,
+                tension_a=float(st.tension_a),
+                tension_b=float(st.tension_b),
+                force_a=[float(x) for x in st.force_a],
+                force_b=[float(x) for x in st.force_b],
+                grounded_length=float(st.grounded_length),
+                n_segments=line.n_segments,
+                newton_iterations=int(st.iterations),
+                max_residual=float(st.max_residual),
+            )
+        )
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        print(f"{'line':>5} {'segs':>5} {'T_A [N]':>14} {'T_B [N]':>14} {'grounded [m]':>13}")
+        for r in rows:
+            print(
+                f"{r['id']:>5} {r['n_segments']:>5} {r['tension_a']:>14.6g} "
+                f"{r['tension_b']:>14.6g} {r['grounded_length']:>13.4f}"
+            )
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    import jax
+
+    from .dynamics import simulate
+    from .io import coupled_point_ids
+
+    if not (np.isfinite(args.duration) and args.duration > 0):
+        raise ValueError(f"--duration = {args.duration} s must be > 0")
+    deck, scene, motion = _load(args, args.motion)
+    if motion is not None and motion.t[-1] < args.duration:
+        warnings.warn(
+            f"{args.motion}: motion ends at t = {motion.t[-1]} s before --duration "
+            f"{args.duration} s; coupled points hold their last position afterwards"
+        )
+    kwargs = dict(
+        solver=args.solver, rtol=args.rtol, atol=args.atol, dt=args.dt, dt_out=args.dt_out
+    )
+    t0 = time.perf_counter()
+    res = simulate(scene, args.duration, **kwargs)
+    jax.block_until_ready(res.tension_b)
+    t1 = time.perf_counter()
+    res = simulate(scene, args.duration, **kwargs) if args.stats else res
+    jax.block_until_ready(res.tension_b)
+    t2 = time.perf_counter()
+    res = jax.device_get(res)
+
+    ids = [ln.label for ln in scene.lines]
+    point_ids = coupled_point_ids(deck)
+    cols = ["t"]
+    data = [np.asarray(res.ts)]
+    for j, lid in enumerate(ids):
+        cols += [f"L{lid}_tension_a", f"L{lid}_tension_b"]
+        data += [res.tension_a[:, j], res.tension_b[:, j]]
+    for pid in point_ids:
+        total = np.zeros((len(res.ts), 3))
+        for j, dl in enumerate(deck.lines):
+            if dl.point_a == pid:
+                total += res.force_a[:, j]
+            if dl.point_b == pid:
+                total += res.force_b[:, j]
+        cols += [f"P{pid}_Fx", f"P{pid}_Fy", f"P{pid}_Fz"]
+        data += [total[:, 0], total[:, 1], total[:, 2]]
+    np.savetxt(args.out, np.column_stack(data), delimiter=",", header=",".join(cols), comments="")
+    if args.stats:
+        stats = dict(
+            compile_s=(t1 - t0) - (t2 - t1),
+            run_s=t2 - t1,
+            steps=int(res.num_steps),
+            rejected_steps=int(res.num_rejected_steps),
+            accepted_steps=int(res.num_accepted_steps),
+            solver=args.solver,
+        )
+        print(json.dumps(stats), file=sys.stderr)
+    return 0
+
+
+def cmd_examples(args) -> int:
+    from .examples import EXAMPLES, example_path
+
+    for name in EXAMPLES:
+        print(f"example:{name}\t{example_path(name)}")
+    return 0
+
+
+def _positive_int(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {v}")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .dynamics.solvers import SOLVERS
+
+    p = argparse.ArgumentParser(prog="moorjax", description=__doc__.split("\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("statics", help="static equilibrium of every line of a deck")
+    s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
+    s.add_argument("--segments", type=_positive_int, help="override every line's segment count")
+    s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
+    s.set_defaults(func=cmd_statics)
+
+    d = sub.add_parser("simulate", help="time-domain simulation of a deck")
+    d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
+    d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
+    d.add_argument("--motion", help="CSV of coupled-point motion (t, P<id>_x, ...)")
+    d.add_argument("--segments", type=_positive_int, help="override every line's segment count")
+    d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
+    d.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance")
+    d.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance [m, m/s]")
+    d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
+    d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
+    d.add_argument("--out", required=True, help="output CSV")
+    d.add_argument("--stats", action="store_true", help="print one JSON line of statistics to stderr")
+    d.set_defaults(func=cmd_simulate)
+
+    e = sub.add_parser("examples", help="list the bundled example decks")
+    e.set_defaults(func=cmd_examples)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (ValueError, RuntimeError, OSError) as exc:
+        print(f"moorjax {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,223 @@
+"""Time-domain simulation of a scene with diffrax.
+
+``simulate`` integrates the lines' Galerkin equations from an initial state (by
+default the static equilibrium at t0) and returns end forces at requested times.
+The core is one ``eqx.filter_jit``-compiled function: calling it again with other
+parameter *values* (EA, Cd, lengths, motions of the same shape) does not
+recompile; changing structure (segment counts, force terms, solver) does.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Any
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from ..statics.fem import solve_line_statics
+from .solvers import is_implicit, make_solver
+from .vector_field import end_outputs, pack, unpack, vector_field
+
+
+class SimulationResult(eqx.Module):
+    """Outputs of :func:`simulate` (leading axis: output times).
+
+    Attributes:
+        ts: (k,) output times [s].
+        tension_a, tension_b: (k, n_lines) end tensions [N] (magnitude of the force
+            the line exerts on its end A / B point).
+        force_a, force_b: (k, n_lines, 3) those forces [N].
+        positions, segment_tensions: per-line tuples of (k, n+1, 3) [m] and (k, n)
+            [N] when requested, else ``None``.
+        final_state: tuple of :class:`LineState` at the last time reached.
+        num_steps, num_accepted_steps, num_rejected_steps: solver statistics.
+        result: diffrax result code (0 = success); see :meth:`succeeded`.
+    """
+
+    ts: Array
+    tension_a: Array
+    tension_b: Array
+    force_a: Array
+    force_b: Array
+    positions: Any
+    segment_tensions: Any
+    final_state: Any
+    num_steps: Array
+    num_accepted_steps: Array
+    num_rejected_steps: Array
+    result: Any
+
+    def succeeded(self):
+        return self.result == diffrax.RESULTS.successful
+
+
+@eqx.filter_jit
+def _integrate(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, progress):
+    term = diffrax.ODETerm(vector_field)
+    saveat = diffrax.SaveAt(
+        ts=ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)
+    )
+    sol = diffrax.diffeqsolve(
+        term,
+        solver,
+        t0,
+        ts[-1],
+        dt0,
+        y0,
+        args=scene,
+        saveat=saveat,
+        stepsize_controller=controller,
+        max_steps=max_steps,
+        throw=False,
+        progress_meter=progress,
+    )
+    return sol
+
+
+def _first_bad_time(ts, tension):
+    bad = ~np.all(np.isfinite(tension), axis=-1)
+    return float(ts[np.argmax(bad)]) if bad.any() else None
+
+
+def simulate(
+    scene,
+    duration=None,
+    *,
+    ts=None,
+    dt_out: float = 0.05,
+    t0: float = 0.0,
+    init=None,
+    solver: str | Any = "kvaerno5",
+    rtol: float = 1e-6,
+    atol: float = 1e-6,
+    dt: float | None = None,
+    dt0: float | None = None,
+    max_steps: int = 1_000_000,
+    save_nodes: bool = False,
+    dense_newton: bool = False,
+    progress: bool = False,
+    throw: bool = True,
+) -> SimulationResult:
+    """Integrate a scene in time.
+
+    Args:
+        scene: a :class:`moorjax.Scene`.
+        duration: simulated time after ``t0`` [s] (or give ``ts``).
+        ts: output times [s] (increasing, > t0); default every ``dt_out`` s.
+        init: tuple of :class:`LineState` (default: static equilibrium at t0).
+        solver: a name from :data:`moorjax.dynamics.SOLVERS` or a diffrax solver.
+        rtol, atol: error-control tolerances (relative; absolute in m and m/s).
+        dt: fixed step [s] (no error control) — otherwise adaptive.
+        dt0: first step of the adaptive controller [s] (default: dt_out/10).
+        max_steps: step limit.
+        save_nodes: also return node positions and segment tensions.
+        dense_newton: dense LU in Newton instead of the block-tridiagonal solve.
+        progress: print a text progress meter.
+        throw: raise ``RuntimeError`` (with the simulated time and likely cause) if
+            the solve fails; with ``False`` inspect ``result`` instead (for
+            ensembles). Under ``jit``/``vmap`` use ``throw=False``.
+    """
+    if ts is None:
+        if duration is None:
+            raise ValueError("give the simulated duration [s] or the output times ts")
+        duration = float(duration)
+        if not np.isfinite(duration) or duration <= 0:
+            raise ValueError(f"duration = {duration} s must be a positive finite number")
+        if not (np.isfinite(dt_out) and dt_out > 0):
+            raise ValueError(f"dt_out = {dt_out} s must be > 0")
+        k = max(int(round(duration / dt_out)), 1)
+        ts = t0 + np.linspace(duration / k, duration, k)
+    ts = jnp.asarray(ts, dtype=float)
+    if ts.ndim != 1 or ts.shape[0] < 1:
+        raise ValueError("output times ts must be a non-empty 1-D array [s]")
+    if not isinstance(ts, jax.core.Tracer):
+        tsn = np.asarray(ts)
+        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
+            raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if not (1e-14 <= float(tol) <= 1e-1):
+            raise ValueError(f"{name} = {tol} is out of range; expected 1e-14 <= {name} <= 0.1")
+
+    if isinstance(solver, str):
+        name = solver
+        fixed_implicit = dt is not None and is_implicit(solver)
+        solver = make_solver(
+            solver,
+            newton_rtol=rtol if fixed_implicit else None,
+            newton_atol=atol if fixed_implicit else None,
+            dense_newton=dense_newton,
+        )
+    else:
+        name = type(solver).__name__
+    if dt is not None:
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt = {dt} s must be > 0")
+        controller = diffrax.ConstantStepSize()
+        step0 = dt
+    else:
+        controller = diffrax.PIDController(rtol=rtol, atol=atol)
+        step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
+
+    if init is None:
+        init = tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)
+    y0 = pack(init)
+    meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
+    sol = _integrate(scene, y0, ts, t0, solver, controller, step0, max_steps, save_nodes, meter)
+    outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
+    res = SimulationResult(
+        ts=ts,
+        tension_a=outs["tension_a"][:-1],
+        tension_b=outs["tension_b"][:-1],
+        force_a=outs["force_a"][:-1],
+        force_b=outs["force_b"][:-1],
+        positions=(tuple(p[:-1] for p in outs["positions"]) if save_nodes else None),
+        segment_tensions=(tuple(p[:-1] for p in outs["segment_tensions"]) if save_nodes else None),
+        final_state=unpack(jax.tree_util.tree_map(lambda a: a[-1], ys)),
+        num_steps=sol.stats["num_steps"],
+        num_accepted_steps=sol.stats["num_accepted_steps"],
+        num_rejected_steps=sol.stats["num_rejected_steps"],
+        result=sol.result,
+    )
+    if throw and not isinstance(res.num_steps, jax.core.Tracer):
+        _raise_on_failure(res, name, max_steps)
+    return res
+
+
+def _raise_on_failure(res, name, max_steps):
+    ok = bool(res.succeeded())
+    tension = np.asarray(res.tension_b)
+    t_bad = _first_bad_time(np.asarray(res.ts), tension)
+    if ok and t_bad is None:
+        return
+    code = res.result
+    if code == diffrax.RESULTS.max_steps_reached:
+        cause = f"the step limit max_steps={max_steps} was reached (raise it, or loosen tolerances)"
+    elif code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular:
+        cause = "Newton did not converge even at the smallest step (stiff snap or slack line?)"
+    else:
+        cause = (
+            "the state became non-finite or the step size collapsed (a snap load or "
+            "slack line the method cannot resolve: try an implicit solver, smaller "
+            "tolerances or more segments)"
+        )
+    where = (
+        f"at t ≈ {t_bad:.6g} s" if t_bad is not None else f"before t = {float(res.ts[-1]):.6g} s"
+    )
+    raise RuntimeError(f"simulation with {name} failed {where}: {cause} [diffrax: {code}]")
+
+
+def timed_simulate(scene, duration, **kwargs):
+    """Run :func:`simulate` twice: returns (result, compile+first-run s, run s)."""
+    t_a = _time.perf_counter()
+    res = simulate(scene, duration, **kwargs)
+    jax.block_until_ready(res.tension_b)
+    t_b = _time.perf_counter()
+    res = simulate(scene, duration, **kwargs)
+    jax.block_until_ready(res.tension_b)
+    t_c = _time.perf_counter()
+    return res, t_b - t_a, t_c - t_b

@@ -1,0 +1,119 @@
+"""Aamo & Fossen's Galerkin linear element for a cable in water.
+
+Node k at r_k, element j between nodes j and j+1 with chord ℓ_j = |r_{j+1} − r_j|,
+unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on the nodes
+(all vectorised over nodes/segments):
+
+- elastic and internal damping: T_j = law(e_j) + BA·ė_j along t_j (Eq. 2/7, f_r);
+- gravity and buoyancy: the wet weight w = (m − ρA)g per unstretched length,
+  w·l/2 from each adjacent element (f_hg, whose (1+e) factors cancel);
+- Morison drag on the velocity relative to the current, per adjacent element half
+  (stretched length ℓ_j/2), split on t_j into axial and normal parts (Eq. 7, f_dt,
+  f_dn);
+- seabed contact on nodes below z = −depth (MoorDyn's vertical spring–damper on
+  d·l_node), with optional smoothed friction.
+
+Absent structure (no drag, no seabed, no current) is never traced.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+
+from .._numerics import abs_times, safe_unit
+from .base import AbstractElement
+from .mass import AbstractMass, NodalMass
+
+
+def _to_nodes(left, right):
+    """Scatter per-segment contributions to its left (j) and right (j+1) nodes."""
+    pad = jnp.zeros_like(left[:1])
+    return jnp.concatenate([left, pad], axis=0) + jnp.concatenate([pad, right], axis=0)
+
+
+def _node_lengths(line):
+    """Unstretched length carried by each node (n+1,) [m]: l/2 at the ends, l inside."""
+    n = line.n_segments
+    w = jnp.ones(n + 1).at[0].set(0.5).at[-1].set(0.5)
+    return w * line.segment_length
+
+
+class LinearElement(AbstractElement):
+    """Linear (two-node) Galerkin element; ``mass`` chooses Eq. 7 or Eq. 2."""
+
+    mass: AbstractMass = NodalMass()
+
+    # -- geometry -------------------------------------------------------------
+    @staticmethod
+    def _segments(r):
+        d = r[1:] - r[:-1]
+        tangent, stretched = safe_unit(d)
+        return tangent, stretched
+
+    def segment_tensions(self, line, r, v):
+        tangent, stretched = self._segments(r)
+        l = line.segment_length
+        strain = stretched / l - 1.0
+        lt = line.line_type
+        tension = lt.axial.tension(strain)
+        strain_rate = jnp.sum(tangent * (v[1:] - v[:-1]), axis=-1) / l
+        return tension + lt.damping * strain_rate
+
+    # -- forces ---------------------------------------------------------------
+    def nodal_forces(self, line, env, r, v):
+        lt = line.line_type
+        tangent, stretched = self._segments(r)
+        tension = self.segment_tensions(line, r, v)
+        f_seg = tension[:, None] * tangent
+        force = _to_nodes(f_seg, -f_seg)
+
+        node_len = _node_lengths(line)
+        weight = lt.wet_weight(env.rho, env.g)
+        force = force.at[:, 2].add(-weight * node_len)
+
+        if lt.drag is not None:
+            u = v if env.current is None else v - env.current.velocity(r[:, 2])
+            force = force + _to_nodes(
+                _drag(lt, env, u[:-1], tangent, stretched),
+                _drag(lt, env, u[1:], tangent, stretched),
+            )
+
+        if env.seabed is not None:
+            force = force + _seabed(lt, env, r, v, node_len)
+        return force
+
+    def accelerations(self, line, env, t, r, v):
+        tangent, stretched = self._segments(r)
+        force = self.nodal_forces(line, env, r, v)
+        return self.mass.accelerations(line, env, t, force, tangent, stretched)
+
+    def end_forces(self, line, env, r, v):
+        force = self.nodal_forces(line, env, r, v)
+        return force[0], force[-1]
+
+
+def _drag(lt, env, u, tangent, stretched):
+    """Drag on one node from one adjacent element half: (n, 3) [N]."""
+    drag = lt.drag
+    ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
+    un = u - ut
+    cn = 0.5 * env.rho * drag.cd_normal * lt.diameter
+    ca = 0.5 * env.rho * drag.cd_axial * jnp.pi * lt.diameter
+    return -(0.5 * stretched)[:, None] * (cn * abs_times(un) + ca * abs_times(ut))
+
+
+def _seabed(lt, env, r, v, node_len):
+    """Contact force (n+1, 3) [N]: (kBot·δ − cBot·ż)·d·l_node for penetration δ > 0."""
+    bed = env.seabed
+    depth_pen = -env.depth - r[:, 2]
+    touching = depth_pen > 0
+    area = lt.diameter * node_len
+    normal = jnp.where(touching, bed.stiffness * depth_pen * area, 0.0)
+    vertical = normal - jnp.where(touching, bed.damping * v[:, 2] * area, 0.0)
+    force = jnp.zeros_like(r).at[:, 2].set(vertical)
+    if bed.friction is not None:
+        fr = bed.friction
+        uh = v[:, :2]
+        speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
+        force = force.at[:, :2].add(-(fr.mu * normal / speed)[:, None] * uh)
+    return force

@@ -1,0 +1,11 @@
+"""Input and output at the edge: MoorDyn decks, motion files, scene building."""
+
+from .build import build_scene as build_scene
+from .build import coupled_point_ids as coupled_point_ids
+from .deck import Deck as Deck
+from .deck import parse_deck as parse_deck
+from .deck import read_deck as read_deck
+from .errors import InputError as InputError
+from .errors import InputWarning as InputWarning
+from .motion import Motion as Motion
+from .motion import read_motion as read_motion

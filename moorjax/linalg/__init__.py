@@ -1,0 +1,1 @@
+"""Structured linear algebra: block-tridiagonal factorisation and a lineax solver."""

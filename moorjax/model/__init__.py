@@ -1,0 +1,49 @@
+"""The physical model: axial laws, line types, environment, ends, lines, scenes."""
+
+from .axial import AbstractAxialLaw as AbstractAxialLaw
+from .axial import Bilateral as Bilateral
+from .axial import LinearEA as LinearEA
+from .axial import PolyesterMBL as PolyesterMBL
+from .axial import PolyesterWu as PolyesterWu
+from .axial import TabulatedEA as TabulatedEA
+from .ends import AbstractEnd as AbstractEnd
+from .ends import FixedEnd as FixedEnd
+from .ends import SinePath as SinePath
+from .ends import TabulatedPath as TabulatedPath
+from .environment import AbstractCurrent as AbstractCurrent
+from .environment import Environment as Environment
+from .environment import ProfileCurrent as ProfileCurrent
+from .environment import Seabed as Seabed
+from .environment import SeabedFriction as SeabedFriction
+from .environment import UniformCurrent as UniformCurrent
+from .line import Line as Line
+from .line import LineState as LineState
+from .line_type import AddedMass as AddedMass
+from .line_type import LineType as LineType
+from .line_type import MorisonDrag as MorisonDrag
+from .scene import Scene as Scene
+
+__all__ = [
+    'AbstractAxialLaw',
+    'AbstractCurrent',
+    'AbstractEnd',
+    'AddedMass',
+    'Bilateral',
+    'Environment',
+    'FixedEnd',
+    'Line',
+    'LineState',
+    'LineType',
+    'LinearEA',
+    'MorisonDrag',
+    'PolyesterMBL',
+    'PolyesterWu',
+    'ProfileCurrent',
+    'Scene',
+    'Seabed',
+    'SeabedFriction',
+    'SinePath',
+    'TabulatedEA',
+    'TabulatedPath',
+    'UniformCurrent',
+]

@@ -1,0 +1,148 @@
+"""End conditions of a line: a fixed point or a prescribed motion.
+
+An end gives its position [m], velocity [m/s] and acceleration [m/s²] at time t
+[s]. Paths are pure functions of t and differentiable in their parameters.
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from .._checks import check_finite, check_positive
+
+
+class AbstractEnd(eqx.Module):
+    """Where a line end is at time t."""
+
+    @abc.abstractmethod
+    def position(self, t) -> Array:
+        """(3,) [m]."""
+
+    @abc.abstractmethod
+    def velocity(self, t) -> Array:
+        """(3,) [m/s]."""
+
+    @abc.abstractmethod
+    def acceleration(self, t) -> Array:
+        """(3,) [m/s²]."""
+
+
+class FixedEnd(AbstractEnd):
+    """An anchor or a held fairlead at ``point`` (3,) [m]."""
+
+    point: Array
+
+    def __init__(self, point):
+        check_finite(point, "end position", "m")
+        self.point = jnp.asarray(point, dtype=float).reshape(3)
+
+    def position(self, t):
+        return self.point
+
+    def velocity(self, t):
+        return jnp.zeros(3)
+
+    def acceleration(self, t):
+        return jnp.zeros(3)
+
+
+class SinePath(AbstractEnd):
+    """``r(t) = center + amplitude·sin(2πt/period + phase)`` (amplitude (3,) [m])."""
+
+    center: Array
+    amplitude: Array
+    period: Array
+    phase: Array
+
+    def __init__(self, center, amplitude, period, phase=0.0):
+        check_finite(center, "path center", "m")
+        check_finite(amplitude, "path amplitude", "m")
+        check_positive(period, "path period", "s")
+        self.center = jnp.asarray(center, dtype=float).reshape(3)
+        self.amplitude = jnp.asarray(amplitude, dtype=float).reshape(3)
+        self.period = jnp.asarray(period, dtype=float)
+        self.phase = jnp.asarray(phase, dtype=float)
+
+    def _w(self):
+        return 2 * jnp.pi / self.period
+
+    def position(self, t):
+        return self.center + self.amplitude * jnp.sin(self._w() * t + self.phase)
+
+    def velocity(self, t):
+        return self.amplitude * self._w() * jnp.cos(self._w() * t + self.phase)
+
+    def acceleration(self, t):
+        return -self.amplitude * self._w() ** 2 * jnp.sin(self._w() * t + self.phase)
+
+
+class TabulatedPath(AbstractEnd):
+    """A sampled path, interpolated by cubic Hermite splines (C¹ in position).
+
+    Without sampled velocities the spline slopes come from central differences of
+    the positions (one-sided at the ends), so velocity is the exact derivative of
+    the interpolated position. Outside the table the end holds its first/last
+    position at rest.
+
+    Args:
+        t: (k,) strictly increasing sample times [s], k ≥ 2.
+        position: (k, 3) [m].
+        velocity: optional (k, 3) [m/s].
+    """
+
+    t: Array
+    r: Array
+    v: Array
+
+    def __init__(self, t, position, velocity=None):
+        t = jnp.asarray(t, dtype=float)
+        r = jnp.asarray(position, dtype=float)
+        if t.ndim != 1 or t.shape[0] < 2 or r.shape != (t.shape[0], 3):
+            raise ValueError(f"tabulated path needs t (k>=2,) and position (k, 3); got {t.shape}, {r.shape}")
+        check_finite(t, "path time", "s")
+        check_finite(r, "path position", "m")
+        if not bool(jnp.all(jnp.diff(t) > 0)):
+            raise ValueError("tabulated path: times [s] must be strictly increasing")
+        if velocity is None:
+            v = jnp.gradient(r, t, axis=0)
+        else:
+            v = jnp.asarray(velocity, dtype=float)
+            if v.shape != r.shape:
+                raise ValueError(f"tabulated path velocity shape {v.shape} != position shape {r.shape}")
+            check_finite(v, "path velocity", "m/s")
+        self.t, self.r, self.v = t, r, v
+
+    def _locate(self, t):
+        tc = jnp.clip(t, self.t[0], self.t[-1])
+        i = jnp.clip(jnp.searchsorted(self.t, tc, side="right") - 1, 0, self.t.shape[0] - 2)
+        h = self.t[i + 1] - self.t[i]
+        s = (tc - self.t[i]) / h
+        inside = (t >= self.t[0]) & (t <= self.t[-1])
+        return i, h, s, inside
+
+    def position(self, t):
+        i, h, s, _ = self._locate(t)
+        h00 = 2 * s**3 - 3 * s**2 + 1
+        h10 = s**3 - 2 * s**2 + s
+        h01 = -2 * s**3 + 3 * s**2
+        h11 = s**3 - s**2
+        return h00 * self.r[i] + h10 * h * self.v[i] + h01 * self.r[i + 1] + h11 * h * self.v[i + 1]
+
+    def velocity(self, t):
+        i, h, s, inside = self._locate(t)
+        d00 = 6 * s**2 - 6 * s
+        d10 = 3 * s**2 - 4 * s + 1
+        d01 = -6 * s**2 + 6 * s
+        d11 = 3 * s**2 - 2 * s
+        v = (d00 * self.r[i] + d01 * self.r[i + 1]) / h + d10 * self.v[i] + d11 * self.v[i + 1]
+        return jnp.where(inside, v, 0.0)
+
+    def acceleration(self, t):
+        i, h, s, inside = self._locate(t)
+        a = ((12 * s - 6) * (self.r[i] - self.r[i + 1]) / h
+             + (6 * s - 4) * self.v[i] + (6 * s - 2) * self.v[i + 1]) / h
+        return jnp.where(inside, a, 0.0)

@@ -1,0 +1,131 @@
+"""The water the lines live in: depth, density, gravity, seabed and current.
+
+Axes: z up, z = 0 at the free surface, the seabed at z = −depth.
+``seabed`` and ``current`` are optional structure: a scene without them never
+traces contact or current terms.
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array
+
+from .._checks import check_finite, check_nonnegative, check_positive
+
+
+class SeabedFriction(eqx.Module):
+    """Smoothed Coulomb friction on the seabed.
+
+    Friction force −μ·N·u/√(|u|² + v_slip²) on the horizontal node velocity u:
+    Coulomb above the slip velocity, viscous below it (so it is differentiable).
+
+    Args:
+        mu: friction coefficient [-].
+        v_slip: regularisation velocity [m/s].
+    """
+
+    mu: Array
+    v_slip: Array
+
+    def __init__(self, mu, v_slip=1e-2):
+        check_nonnegative(mu, "seabed friction coefficient", "-")
+        check_positive(v_slip, "friction slip velocity", "m/s")
+        self.mu = jnp.asarray(mu, dtype=float)
+        self.v_slip = jnp.asarray(v_slip, dtype=float)
+
+
+class Seabed(eqx.Module):
+    """Vertical spring–damper contact (MoorDyn's kBot/cBot), optional friction.
+
+    Contact pressure per unit line length and diameter: kBot·δ − cBot·ż for a
+    penetration δ > 0, so the force on a node is (kBot·δ − cBot·ż)·d·l_node.
+
+    Args:
+        stiffness: kBot [Pa/m].
+        damping: cBot [Pa·s/m].
+        friction: optional :class:`SeabedFriction`.
+    """
+
+    stiffness: Array
+    damping: Array
+    friction: SeabedFriction | None
+
+    def __init__(self, stiffness=3e6, damping=3e5, friction: SeabedFriction | None = None):
+        check_positive(stiffness, "seabed stiffness kBot", "Pa/m")
+        check_nonnegative(damping, "seabed damping cBot", "Pa·s/m")
+        self.stiffness = jnp.asarray(stiffness, dtype=float)
+        self.damping = jnp.asarray(damping, dtype=float)
+        self.friction = friction
+
+
+class AbstractCurrent(eqx.Module):
+    """A steady current field U(z) [m/s]."""
+
+    @abc.abstractmethod
+    def velocity(self, z: Array) -> Array:
+        """Current velocity (..., 3) [m/s] at heights z (...) [m]."""
+
+
+class UniformCurrent(AbstractCurrent):
+    """The same current at every depth. ``velocity``: (3,) [m/s]."""
+
+    u: Array
+
+    def __init__(self, velocity):
+        check_finite(velocity, "current velocity", "m/s")
+        self.u = jnp.asarray(velocity, dtype=float).reshape(3)
+
+    def velocity(self, z):
+        return jnp.broadcast_to(self.u, jnp.shape(z) + (3,))
+
+
+class ProfileCurrent(AbstractCurrent):
+    """A depth profile, linearly interpolated (held constant beyond its ends).
+
+    Args:
+        z: increasing heights [m] (negative below the surface).
+        velocity: (len(z), 3) current velocities [m/s].
+    """
+
+    z: Array
+    u: Array
+
+    def __init__(self, z, velocity):
+        z = jnp.asarray(z, dtype=float)
+        u = jnp.asarray(velocity, dtype=float)
+        if z.ndim != 1 or u.shape != (z.shape[0], 3):
+            raise ValueError(f"current profile needs z (k,) and velocity (k, 3); got {z.shape}, {u.shape}")
+        check_finite(z, "current profile z", "m")
+        check_finite(u, "current profile velocity", "m/s")
+        if z.shape[0] > 1 and not bool(jnp.all(jnp.diff(z) > 0)):
+            raise ValueError("current profile heights z [m] must be strictly increasing")
+        self.z, self.u = z, u
+
+    def velocity(self, z):
+        zf = jnp.ravel(z)
+        out = jnp.stack([jnp.interp(zf, self.z, self.u[:, i]) for i in range(3)], axis=-1)
+        return out.reshape(jnp.shape(z) + (3,))
+
+
+class Environment(eqx.Module):
+    """Water depth [m], density ρ [kg/m³], gravity g [m/s²], optional seabed/current."""
+
+    depth: Array
+    rho: Array
+    g: Array
+    seabed: Seabed | None
+    current: AbstractCurrent | None
+
+    def __init__(self, depth, rho=1025.0, g=9.80665, seabed: Seabed | None = None,
+                 current: AbstractCurrent | None = None):
+        check_positive(depth, "water depth", "m")
+        check_positive(rho, "water density", "kg/m³")
+        check_positive(g, "gravity", "m/s²")
+        self.depth = jnp.asarray(depth, dtype=float)
+        self.rho = jnp.asarray(rho, dtype=float)
+        self.g = jnp.asarray(g, dtype=float)
+        self.seabed = seabed
+        self.current = current

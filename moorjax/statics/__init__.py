@@ -1,0 +1,7 @@
+"""Statics: the analytic elastic catenary and finite-element equilibrium."""
+
+from .fem import LineStatics as LineStatics
+from .fem import fairlead_stiffness as fairlead_stiffness
+from .fem import initial_guess as initial_guess
+from .fem import solve_line_statics as solve_line_statics
+from .fem import solve_statics as solve_statics
