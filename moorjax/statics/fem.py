@@ -16,12 +16,15 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax
+import jax.lax as lax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
-from ..linalg.banded_solver import BlockTridiagonalSolver
+from ..linalg import block_tridiagonal as btd
+from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
+from ..model.axial import Bilateral
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
 
@@ -94,6 +97,43 @@ def _residual(line, env, t):
     return fn
 
 
+_BACKTRACK = 2.0 ** -jnp.arange(12)
+
+
+def _damped_newton(fn, y0, atol, rtol, max_steps):
+    """Newton with backtracking line search on the max-norm of the residual.
+
+    The Jacobian band comes from coloured JVPs (O(n)); trial step lengths 1, ½, …
+    are evaluated together (vmap) and the first that reduces the residual wins.
+    Stops when the step is below ``atol + rtol·|y|``. Returns (y, iterations).
+    """
+    def norm(f):
+        return jnp.max(jnp.abs(f))
+
+    def cond(c):
+        _, it, _, done = c
+        return (it < max_steps) & jnp.invert(done)
+
+    def body(c):
+        y, it, fy, _ = c
+        _, lin = jax.linearize(lambda z: fn(z, None), y)
+        lower, diag, upper, _, _ = band_of(lin, jax.ShapeDtypeStruct(y.shape, y.dtype))
+        dx = btd.solve(btd.factor(lower, diag, upper), fy)
+        trial = jax.vmap(lambda a: fn(y - a * dx, None))(_BACKTRACK)
+        tn = jax.vmap(norm)(trial)
+        good = jnp.isfinite(tn) & (tn < (1 - 1e-4 * _BACKTRACK) * norm(fy))
+        k = jnp.where(jnp.any(good), jnp.argmax(good), _BACKTRACK.shape[0] - 1)
+        step = _BACKTRACK[k] * dx
+        y_new = y - step
+        small = jnp.all(jnp.abs(step) <= atol + rtol * jnp.abs(y_new))
+        stuck = jnp.invert(jnp.any(good))
+        return y_new, it + 1, trial[k], small | stuck | jnp.invert(jnp.all(jnp.isfinite(y_new)))
+
+    f0 = fn(y0, None)
+    y, it, _, _ = lax.while_loop(cond, body, (y0, jnp.array(0), f0, jnp.array(False)))
+    return lax.stop_gradient(y), it
+
+
 def _grounded_length(line, env, r):
     if env.seabed is None:
         return jnp.zeros(())
@@ -164,8 +204,20 @@ def solve_line_statics(
     _check_geometry(line, env, t)
     r0 = initial_guess(line, env, t).r if init is None else init.r
     fn = _residual(line, env, t)
+    # 1) a damped Newton (backtracking on the residual) finds the equilibrium
+    #    robustly from the catenary guess. It uses a bilateral axial law: on coarse
+    #    meshes the catenary guess has chords shorter than the unstretched element
+    #    (slack, zero stiffness, a singular Jacobian); letting those segments push
+    #    keeps Newton well-posed, and where the equilibrium is taut (the usual case)
+    #    both laws have the same solution. 2) optimistix's Newton with the true law,
+    #    started there, polishes it and attaches implicit-function gradients.
+    axial = line.line_type.axial
+    bilateral = axial if isinstance(axial, Bilateral) else Bilateral(axial)
+    line_bi = eqx.tree_at(lambda ln: ln.line_type.axial, line, bilateral)
+    fn_bi = _residual(line_bi, env, t)
+    r_start, damped_steps = _damped_newton(fn_bi, lax.stop_gradient(r0), atol, rtol, max_steps)
     solver = optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver())
-    sol = optx.root_find(fn, solver, r0, max_steps=max_steps, throw=False)
+    sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
     r_free = sol.value
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
@@ -187,7 +239,7 @@ def solve_line_statics(
         tension_b=jnp.linalg.norm(fb),
         grounded_length=_grounded_length(line, env, r),
         converged=converged,
-        iterations=sol.stats["num_steps"],
+        iterations=damped_steps + sol.stats["num_steps"],
         max_residual=max_res,
     )
     if throw:
