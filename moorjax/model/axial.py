@@ -65,7 +65,8 @@ def _load_dependent_tension(strain, scale, alpha, beta, bs, cap):
     it has there, so tensions stay finite (and C¹) for any strain.
     """
     k = scale * beta / bs
-    e_cap = cap / jnp.maximum(k, 1e-300)
+    has_cap = k > 0  # β = 0: constant stiffness, no singular strain
+    e_cap = jnp.where(has_cap, cap / jnp.where(has_cap, k, 1.0), 1e300)
     e = jnp.minimum(strain, e_cap)
     denom = 1.0 - e * k
     t = e * scale * alpha / denom
@@ -169,6 +170,11 @@ class TabulatedEA(AbstractAxialLaw):
         check_nonnegative(s, "tabulated strain", "-")
         if not bool(jnp.all(jnp.diff(s) > 0)):
             raise ValueError(f"tabulated EA: strains {list(map(float, s))} must be strictly increasing")
+        if float(s[0]) == 0.0 and float(t[0]) != 0.0:
+            raise ValueError(
+                f"tabulated EA: tension at strain 0 is {float(t[0])} N; expected 0 N "
+                "(a slack line carries no tension)"
+            )
         if float(s[0]) > 0.0:
             s = jnp.concatenate([jnp.zeros(1), s])
             t = jnp.concatenate([jnp.zeros(1), t])
