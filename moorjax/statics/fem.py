@@ -218,7 +218,9 @@ def solve_line_statics(
     r_start, damped_steps = _damped_newton(fn_bi, lax.stop_gradient(r0), atol, rtol, max_steps)
     solver = optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver())
     sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
-    r_free = sol.value
+    # a diverged polish must not hand back NaN: keep the last finite iterate (the
+    # result is then flagged not converged by its force imbalance)
+    r_free = jnp.where(jnp.all(jnp.isfinite(sol.value)), sol.value, r_start)
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element
