@@ -20,7 +20,7 @@ import numpy as np
 from jaxtyping import Array
 
 from ..statics.fem import solve_line_statics
-from .solvers import is_implicit, make_solver
+from .solvers import StateNorm, is_implicit, make_solver
 from .vector_field import end_outputs, pack, unpack, vector_field
 
 
@@ -93,13 +93,15 @@ def simulate(
     t0: float = 0.0,
     init=None,
     solver: str | Any = "kvaerno5",
-    rtol: float = 1e-6,
-    atol: float = 1e-6,
+    rtol: float = 1e-5,
+    atol: float = 1e-4,
+    atol_velocity: float | None = None,
     dt: float | None = None,
     dt0: float | None = None,
     max_steps: int = 1_000_000,
     save_nodes: bool = False,
     dense_newton: bool = False,
+    linear_solver: str = "reduced",
     progress: bool = False,
     throw: bool = True,
 ) -> SimulationResult:
@@ -111,12 +113,21 @@ def simulate(
         ts: output times [s] (increasing, > t0); default every ``dt_out`` s.
         init: tuple of :class:`LineState` (default: static equilibrium at t0).
         solver: a name from :data:`moorjax.dynamics.SOLVERS` or a diffrax solver.
-        rtol, atol: error-control tolerances (relative; absolute in m and m/s).
-        dt: fixed step [s] (no error control) — otherwise adaptive.
+        rtol: relative error-control tolerance (of node positions and velocities).
+        atol: absolute tolerance of node positions [m] (default 0.1 mm: a
+            tension error of about EA/l·atol).
+        atol_velocity: absolute tolerance of node velocities [m/s] (default
+            100·atol per second). The same tolerances and norm stop the
+            implicit methods' Newton iterations.
+        dt: fixed step [s] (no error control) — otherwise adaptive, with a PI
+            controller (coefficients 0.3/0.4, suited to stiff problems).
         dt0: first step of the adaptive controller [s] (default: dt_out/10).
         max_steps: step limit.
         save_nodes: also return node positions and segment tensions.
-        dense_newton: dense LU in Newton instead of the block-tridiagonal solve.
+        linear_solver: Newton's linear solve: ``"reduced"`` (default; positions
+            eliminated, 3×3 block-tridiagonal), ``"block"`` (6×6 blocks) or
+            ``"dense"`` (dense LU, O(n³); for comparison).
+        dense_newton: same as ``linear_solver="dense"``.
         progress: print a text progress meter.
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if
             the solve fails; with ``False`` inspect ``result`` instead (for
@@ -139,17 +150,27 @@ def simulate(
         tsn = np.asarray(ts)
         if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
             raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
-    for name, tol in (("rtol", rtol), ("atol", atol)):
-        if not (1e-14 <= float(tol) <= 1e-1):
-            raise ValueError(f"{name} = {tol} is out of range; expected 1e-14 <= {name} <= 0.1")
+    if atol_velocity is None:
+        atol_velocity = 100.0 * float(atol)
+    for name, tol, unit, hi in (
+        ("rtol", rtol, "", 0.1),
+        ("atol", atol, " m", 0.1),
+        ("atol_velocity", atol_velocity, " m/s", 10.0),
+    ):
+        if not (1e-14 <= float(tol) <= hi):
+            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
+    norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
+    rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
 
     if isinstance(solver, str):
         name = solver
         fixed_implicit = dt is not None and is_implicit(solver)
         solver = make_solver(
             solver,
-            newton_rtol=rtol if fixed_implicit else None,
-            newton_atol=atol if fixed_implicit else None,
+            newton_rtol=rtol_a if fixed_implicit else None,
+            newton_atol=atol_a if fixed_implicit else None,
+            norm=norm,
+            linear_solver=linear_solver,
             dense_newton=dense_newton,
         )
     else:
@@ -160,7 +181,9 @@ def simulate(
         controller = diffrax.ConstantStepSize()
         step0 = dt
     else:
-        controller = diffrax.PIDController(rtol=rtol, atol=atol)
+        controller = diffrax.PIDController(
+            rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4
+        )
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
 
     if init is None:

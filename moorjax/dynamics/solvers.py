@@ -1,16 +1,28 @@
-"""Time-stepping methods by name.
+"""Time-stepping methods by name, and the error norm they share.
 
 Implicit (ESDIRK, L-stable) Kvaerno methods get a Newton (very-chord) root
-finder whose linear solves are block-tridiagonal: the Jacobian is rebuilt once per
-step from 18 coloured JVPs of the vector field and factored in O(n). Explicit
-methods are there for comparison.
+finder whose linear solves exploit the structure of the stage matrix: the
+Jacobian is rebuilt once per step from 18 coloured JVPs of the vector field, the
+positions are eliminated (``ṙ = v`` makes their rows trivial) and the remaining
+3×3 block-tridiagonal velocity system is factored in O(n)
+(:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). Explicit methods
+are there for comparison.
+
+Error control measures positions [m] and velocities [m/s] on separate absolute
+scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
+while velocity errors of a few mm/s are harmless; one common ``atol`` would make
+the controller chase tiny high-frequency axial velocity oscillations.
 """
 
 from __future__ import annotations
 
 import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array
 
-from ..linalg.banded_solver import BlockTridiagonalSolver
+from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
 
 IMPLICIT = {
     "kvaerno3": diffrax.Kvaerno3,
@@ -31,26 +43,74 @@ EXPLICIT = {
 SOLVERS = tuple(sorted(IMPLICIT) + sorted(EXPLICIT))
 
 
-def make_solver(name: str, *, newton_rtol=None, newton_atol=None, dense_newton: bool = False):
+LINEAR_SOLVERS = ("reduced", "block", "dense")
+
+
+class StateNorm(eqx.Module):
+    """RMS norm of a solver-state pytree with velocities weighted against positions.
+
+    Leaves are (n, 6) [r, v] arrays (or anything whose last axis is 6). The
+    velocity columns are multiplied by ``velocity_weight`` = atol / atol_velocity,
+    so that with the controller's ``atol`` in metres, a velocity error of
+    ``atol_velocity`` [m/s] counts as much as a position error of ``atol`` [m].
+    An array field: changing it does not recompile.
+    """
+
+    velocity_weight: Array
+
+    def __call__(self, tree):
+        w = jnp.concatenate([jnp.ones(3), jnp.full(3, 1.0) * self.velocity_weight])
+        leaves = jax.tree_util.tree_leaves(tree)
+        if not leaves:
+            return jnp.asarray(0.0)
+        sq = sum(jnp.sum(jnp.abs(x * w) ** 2) for x in leaves)
+        size = sum(x.size for x in leaves)
+        return jnp.sqrt(sq / size)
+
+
+def make_solver(
+    name: str,
+    *,
+    newton_rtol=None,
+    newton_atol=None,
+    norm=None,
+    linear_solver: str = "reduced",
+    dense_newton: bool = False,
+):
     """A diffrax solver from its name (case-insensitive).
 
     Args:
         name: one of :data:`SOLVERS`.
-        newton_rtol, newton_atol: Newton tolerances of implicit methods; by
-            default those of the step-size controller (needed for fixed steps).
-        dense_newton: use a dense LU instead of the block-tridiagonal solve
-            (for comparison and for Jacobians that are not banded).
+        newton_rtol, newton_atol, norm: Newton tolerances and norm of implicit
+            methods; by default those of the step-size controller (with fixed
+            steps there is none, so give them).
+        linear_solver: Newton's linear solve: ``"reduced"`` (positions
+            eliminated, 3×3 block-tridiagonal, default), ``"block"`` (6×6
+            block-tridiagonal) or ``"dense"`` (dense LU, O(n³), for comparison
+            and for Jacobians that are not banded).
+        dense_newton: same as ``linear_solver="dense"`` (kept for compatibility).
     """
     key = name.lower().replace("-", "_")
     if key in EXPLICIT:
         return EXPLICIT[key]()
     if key not in IMPLICIT:
         raise ValueError(f"unknown solver {name!r}; choose one of {', '.join(SOLVERS)}")
-    linear_solver = None if dense_newton else BlockTridiagonalSolver()
-    kwargs = {} if linear_solver is None else {"linear_solver": linear_solver}
+    if dense_newton:
+        linear_solver = "dense"
+    if linear_solver not in LINEAR_SOLVERS:
+        raise ValueError(
+            f"unknown linear solver {linear_solver!r}; choose one of {', '.join(LINEAR_SOLVERS)}"
+        )
+    kwargs = {
+        "reduced": {"linear_solver": SecondOrderBandSolver()},
+        "block": {"linear_solver": BlockTridiagonalSolver()},
+        "dense": {},
+    }[linear_solver]
     if newton_rtol is None:
         root_finder = diffrax.with_stepsize_controller_tols(diffrax.VeryChord)(**kwargs)
     else:
+        if norm is not None:
+            kwargs["norm"] = norm
         root_finder = diffrax.VeryChord(rtol=newton_rtol, atol=newton_atol, **kwargs)
     return IMPLICIT[key](root_finder=root_finder)
 

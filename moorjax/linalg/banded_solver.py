@@ -126,3 +126,69 @@ class BlockTridiagonalSolver(lx.AbstractLinearSolver):
 
     def allow_dependent_rows(self, operator):
         return False
+
+
+class _ReducedState(eqx.Module):
+    lower: Array  # the full 6×6 band, kept for the transpose
+    diag: Array
+    upper: Array
+    p_inv: Array  # (N, 3, 3) inverses of the position-row diagonal blocks
+    gain: Array  # (N, 3, 3) P⁻¹Q
+    coupling: tuple  # R band (lower, diag, upper), (N, 3, 3) each
+    lu: btd.BlockTridiagonalLU  # of the reduced 3×3 velocity system
+    treedef: Any = eqx.field(static=True)
+    sizes: tuple = eqx.field(static=True)
+
+
+class SecondOrderBandSolver(BlockTridiagonalSolver):
+    """Block-tridiagonal solve specialised to first-order forms of 2nd-order systems.
+
+    For a state of node-major [position(3), velocity(3)] rows, an implicit stage
+    matrix ``I − c·J`` of ``ṙ = v, v̇ = a(r, v)`` has position rows ``P x_i + Q v_i``
+    with P, Q 3×3 *block-diagonal* (here P = I, Q = −cI): each node's position row
+    only touches the node itself. Eliminating the positions leaves a
+    block-tridiagonal system in the velocities with **3×3** blocks,
+    ``(S − R P⁻¹Q) v = b₂ − R P⁻¹ b₁``, then ``x = P⁻¹(b₁ − Q v)``. Factoring 3×3
+    blocks with cofactor inverses is several times cheaper than 6×6 blocks with
+    LAPACK pivots. The band itself still comes from the 18 coloured JVPs.
+
+    Requires operator leaves (n_i, 6) in that layout (as :mod:`moorjax.dynamics`
+    builds them). Couplings of position rows to neighbouring nodes, if any, are
+    ignored, which turns the Newton step into a chord step; the nonlinear solver's
+    convergence test still guards the result. The transpose (needed by reverse-mode
+    adjoints) falls back to the general 6×6 block solve.
+    """
+
+    def init(self, operator, options):
+        del options
+        lower, diag, upper, treedef, sizes = band_of(operator.mv, operator.in_structure())
+        if diag.shape[-1] != 6:
+            raise ValueError(f"SecondOrderBandSolver needs 6 dofs per node (r, v); got {diag.shape[-1]}")
+        p_inv = btd.inv3(diag[:, :3, :3])
+        gain = p_inv @ diag[:, :3, 3:]
+        r_l, r_d, r_u = lower[:, 3:, :3], diag[:, 3:, :3], upper[:, 3:, :3]
+        # neighbour gains: node i-1 for the lower block, node i+1 for the upper
+        g_prev = jnp.concatenate([jnp.zeros_like(gain[:1]), gain[:-1]], axis=0)
+        g_next = jnp.concatenate([gain[1:], jnp.zeros_like(gain[:1])], axis=0)
+        s_l = lower[:, 3:, 3:] - r_l @ g_prev
+        s_d = diag[:, 3:, 3:] - r_d @ gain
+        s_u = upper[:, 3:, 3:] - r_u @ g_next
+        lu = btd.factor3(s_l, s_d, s_u)
+        return _ReducedState(lower, diag, upper, p_inv, gain, (r_l, r_d, r_u), lu, treedef, sizes)
+
+    def compute(self, state, vector, options):
+        if isinstance(state, _State):  # transposed operator: general solve
+            return super().compute(state, vector, options)
+        b = _flatten(vector, state.sizes)
+        u = jnp.einsum("nij,nj->ni", state.p_inv, b[:, :3])
+        rhs = b[:, 3:] - btd.matvec(*state.coupling, u)
+        vel = btd.solve(state.lu, rhs)
+        pos = u - jnp.einsum("nij,nj->ni", state.gain, vel)
+        x = jnp.concatenate([pos, vel], axis=-1)
+        return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
+
+    def transpose(self, state, options):
+        if isinstance(state, _State):
+            return super().transpose(state, options)
+        full = _State(state.lower, state.diag, state.upper, None, state.treedef, state.sizes)
+        return super().transpose(full, options)
