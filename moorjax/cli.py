@@ -2,7 +2,7 @@
 
     moorjax statics DECK [--segments N] [--json]
     moorjax simulate DECK --duration T [--motion MOTION.csv] [--segments N]
-        [--solver NAME] [--rtol R] [--atol A] [--dt DT] [--dt-out 0.05]
+        [--solver NAME] [--rtol R] [--atol A] [--atol-velocity AV] [--dt DT] [--dt-out 0.05]
         --out OUT.csv [--stats]
     moorjax examples
 
@@ -94,7 +94,12 @@ def cmd_simulate(args) -> int:
             f"{args.duration} s; coupled points hold their last position afterwards"
         )
     kwargs = dict(
-        solver=args.solver, rtol=args.rtol, atol=args.atol, dt=args.dt, dt_out=args.dt_out
+        solver=args.solver,
+        rtol=args.rtol,
+        atol=args.atol,
+        atol_velocity=args.atol_velocity,
+        dt=args.dt,
+        dt_out=args.dt_out,
     )
     t0 = time.perf_counter()
     res = simulate(scene, args.duration, **kwargs)
@@ -171,8 +176,15 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--motion", help="CSV of coupled-point motion (t, P<id>_x, ...)")
     d.add_argument("--segments", type=_positive_int, help="override every line's segment count")
     d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
-    d.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance")
-    d.add_argument("--atol", type=float, default=1e-6, help="absolute tolerance [m, m/s]")
+    d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5)")
+    d.add_argument(
+        "--atol", type=float, default=1e-4, help="absolute tolerance of positions [m] (default 1e-4)"
+    )
+    d.add_argument(
+        "--atol-velocity",
+        type=float,
+        help="absolute tolerance of velocities [m/s] (default 100*atol per s)",
+    )
     d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
     d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
     d.add_argument("--out", required=True, help="output CSV")
