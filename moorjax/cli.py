@@ -4,6 +4,8 @@
     moorjax simulate DECK --duration T [--motion MOTION.csv] [--segments N]
         [--solver NAME] [--rtol R] [--atol A] [--atol-velocity AV] [--dt DT] [--dt-out 0.05]
         --out OUT.csv [--stats]
+    moorjax ensemble DECK --duration T [--motion MOTION.csv] --vary NAME=v1,v2,...
+        [--vary ...] --out DIR [--histories] [--chunk-size K] [simulate options]
     moorjax examples
 
 DECK is a MoorDyn v2 input file or ``example:NAME`` for a bundled deck.
@@ -79,12 +81,8 @@ def cmd_statics(args) -> int:
     return 0
 
 
-def cmd_simulate(args) -> int:
-    import jax
-
-    from .dynamics import simulate
-    from .io import coupled_point_ids
-
+def _load_for_dynamics(args):
+    """Deck, scene and simulate() keyword arguments from the shared options."""
     if not (np.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration = {args.duration} s must be > 0")
     deck, scene, motion = _load(args, args.motion)
@@ -101,6 +99,16 @@ def cmd_simulate(args) -> int:
         dt=args.dt,
         dt_out=args.dt_out,
     )
+    return deck, scene, kwargs
+
+
+def cmd_simulate(args) -> int:
+    import jax
+
+    from .dynamics import simulate
+    from .io import coupled_point_ids
+
+    deck, scene, kwargs = _load_for_dynamics(args)
     t0 = time.perf_counter()
     res = simulate(scene, args.duration, **kwargs)
     jax.block_until_ready(res.tension_b)
@@ -140,6 +148,55 @@ def cmd_simulate(args) -> int:
     return 0
 
 
+def cmd_ensemble(args) -> int:
+    import os
+
+    from .ensemble.store import SUMMARY_STATS, run_chunked
+    from .ensemble.vary import parse_vary, sweep
+
+    varies = [parse_vary(v) for v in args.vary]  # names checked before any work
+    _, scene, kwargs = _load_for_dynamics(args)
+    members, table = sweep(scene, varies)
+    t0 = time.perf_counter()
+    data = run_chunked(
+        members, args.out, args.duration, chunk_size=args.chunk_size,
+        histories=args.histories, **kwargs,
+    )
+    wall = time.perf_counter() - t0
+    ids = [ln.label for ln in scene.lines]
+    names = [n for n, _ in varies]
+    cols = ["member"] + names + ["status", "steps"]
+    for j, lid in enumerate(ids):
+        for end in ("tension_a", "tension_b"):
+            cols += [f"L{lid}_{end}_{st}" for st in SUMMARY_STATS]
+    with open(os.path.join(args.out, "summary.csv"), "w") as f:
+        f.write(",".join(cols) + "\n")
+        for i, row in enumerate(table):
+            vals = [str(i)] + [repr(row[n]) for n in names]
+            vals += [str(data["status"][i]), str(int(data["num_steps"][i]))]
+            for j in range(len(ids)):
+                for end in ("tension_a", "tension_b"):
+                    vals += [f"{data[f'stat_{end}_{st}'][i, j]:.9g}" for st in SUMMARY_STATS]
+            f.write(",".join(vals) + "\n")
+    if args.histories:
+        hdir = os.path.join(args.out, "histories")
+        os.makedirs(hdir, exist_ok=True)
+        hcols = ["t"] + [f"L{lid}_{end}" for lid in ids for end in ("tension_a", "tension_b")]
+        for i in range(len(table)):
+            cols_i = [data["ts"]]
+            for j in range(len(ids)):
+                cols_i += [data["tension_a"][i, :, j], data["tension_b"][i, :, j]]
+            np.savetxt(os.path.join(hdir, f"member_{i:05d}.csv"), np.column_stack(cols_i),
+                       delimiter=",", header=",".join(hcols), comments="")
+    n_bad = int(np.sum(data["status"] != "ok"))
+    print(
+        f"{len(table)} members in {wall:.1f} s; {n_bad} failed; summary: "
+        f"{os.path.join(args.out, 'summary.csv')}",
+        file=sys.stderr,
+    )
+    return 0
+
+
 def cmd_examples(args) -> int:
     from .examples import EXAMPLES, example_path
 
@@ -159,8 +216,6 @@ def _positive_int(text):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .dynamics.solvers import SOLVERS
-
     p = argparse.ArgumentParser(prog="moorjax", description=__doc__.split("\n")[0])
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -171,6 +226,33 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_statics)
 
     d = sub.add_parser("simulate", help="time-domain simulation of a deck")
+    _dynamics_options(d)
+    d.add_argument("--out", required=True, help="output CSV")
+    d.add_argument("--stats", action="store_true", help="print one JSON line of statistics to stderr")
+    d.set_defaults(func=cmd_simulate)
+
+    en = sub.add_parser("ensemble", help="parameter sweep of a deck as one vmapped ensemble")
+    _dynamics_options(en)
+    en.add_argument(
+        "--vary", action="append", required=True, metavar="NAME=v1,v2,...",
+        help="parameter values (repeatable; members are all combinations). Names: "
+        "EA, BA, Cd, CdAx, Ca, CaAx, d, mass, length (optionally L<id>.NAME for one line), "
+        "depth, rho, kBot, cBot",
+    )
+    en.add_argument("--out", required=True, help="output directory (resumed if it exists)")
+    en.add_argument("--histories", action="store_true", help="also write each member's tension history")
+    en.add_argument("--chunk-size", type=_positive_int, default=100, help="members per compiled batch")
+    en.set_defaults(func=cmd_ensemble)
+
+    e = sub.add_parser("examples", help="list the bundled example decks")
+    e.set_defaults(func=cmd_examples)
+    return p
+
+
+def _dynamics_options(d):
+    """Options shared by simulate and ensemble."""
+    from .dynamics.solvers import SOLVERS
+
     d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
     d.add_argument("--motion", help="CSV of coupled-point motion (t, P<id>_x, ...)")
@@ -187,13 +269,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
     d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
-    d.add_argument("--out", required=True, help="output CSV")
-    d.add_argument("--stats", action="store_true", help="print one JSON line of statistics to stderr")
-    d.set_defaults(func=cmd_simulate)
-
-    e = sub.add_parser("examples", help="list the bundled example decks")
-    e.set_defaults(func=cmd_examples)
-    return p
 
 
 def main(argv=None) -> int:

@@ -56,8 +56,8 @@ class SimulationResult(eqx.Module):
         return self.result == diffrax.RESULTS.successful
 
 
-@eqx.filter_jit
-def _integrate(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, progress):
+def _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, progress):
+    """One integration as a pure function of arrays (jit-, vmap- and grad-able)."""
     term = diffrax.ODETerm(vector_field)
     saveat = diffrax.SaveAt(
         ts=ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)
@@ -76,7 +76,134 @@ def _integrate(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes
         throw=False,
         progress_meter=progress,
     )
-    return sol
+    outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
+    return SimulationResult(
+        ts=ts,
+        tension_a=outs["tension_a"][:-1],
+        tension_b=outs["tension_b"][:-1],
+        force_a=outs["force_a"][:-1],
+        force_b=outs["force_b"][:-1],
+        positions=(tuple(p[:-1] for p in outs["positions"]) if with_nodes else None),
+        segment_tensions=(
+            tuple(p[:-1] for p in outs["segment_tensions"]) if with_nodes else None
+        ),
+        final_state=unpack(jax.tree_util.tree_map(lambda a: a[-1], ys)),
+        num_steps=sol.stats["num_steps"],
+        num_accepted_steps=sol.stats["num_accepted_steps"],
+        num_rejected_steps=sol.stats["num_rejected_steps"],
+        result=sol.result,
+    )
+
+
+_integrate = eqx.filter_jit(_solve)
+
+
+class Plan(eqx.Module):
+    """Validated, scene-independent settings of a simulation (see :func:`plan`)."""
+
+    ts: Array
+    t0: float = eqx.field(static=True)
+    solver: Any
+    controller: Any
+    dt0: float = eqx.field(static=True)
+    max_steps: int = eqx.field(static=True)
+    save_nodes: bool = eqx.field(static=True)
+    meter: Any
+    name: str = eqx.field(static=True)
+
+    def run(self, scene, y0):
+        """The pure integration: a :class:`SimulationResult` (no checks, no throw)."""
+        return _solve(
+            scene, y0, self.ts, self.t0, self.solver, self.controller, self.dt0,
+            self.max_steps, self.save_nodes, self.meter,
+        )
+
+
+def plan(
+    duration=None,
+    *,
+    ts=None,
+    dt_out: float = 0.05,
+    t0: float = 0.0,
+    solver: str | Any = "kvaerno5",
+    rtol: float = 1e-5,
+    atol: float = 1e-4,
+    atol_velocity: float | None = None,
+    dt: float | None = None,
+    dt0: float | None = None,
+    max_steps: int = 1_000_000,
+    save_nodes: bool = False,
+    dense_newton: bool = False,
+    linear_solver: str = "reduced",
+    progress: bool = False,
+) -> Plan:
+    """Check the settings of :func:`simulate` (same arguments) and build the solver.
+
+    Raises ``ValueError`` naming the offending setting. Used by :func:`simulate`
+    and by ensembles, which run one plan on many scenes.
+    """
+    if ts is None:
+        if duration is None:
+            raise ValueError("give the simulated duration [s] or the output times ts")
+        duration = float(duration)
+        if not np.isfinite(duration) or duration <= 0:
+            raise ValueError(f"duration = {duration} s must be a positive finite number")
+        if not (np.isfinite(dt_out) and dt_out > 0):
+            raise ValueError(f"dt_out = {dt_out} s must be > 0")
+        k = max(int(round(duration / dt_out)), 1)
+        ts = t0 + np.linspace(duration / k, duration, k)
+    ts = jnp.asarray(ts, dtype=float)
+    if ts.ndim != 1 or ts.shape[0] < 1:
+        raise ValueError("output times ts must be a non-empty 1-D array [s]")
+    if not isinstance(ts, jax.core.Tracer):
+        tsn = np.asarray(ts)
+        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
+            raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
+    if atol_velocity is None:
+        atol_velocity = 100.0 * float(atol)
+    for name, tol, unit, hi in (
+        ("rtol", rtol, "", 0.1),
+        ("atol", atol, " m", 0.1),
+        ("atol_velocity", atol_velocity, " m/s", 10.0),
+    ):
+        if not (1e-14 <= float(tol) <= hi):
+            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
+    norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
+    rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
+
+    if isinstance(solver, str):
+        name = solver
+        fixed_implicit = dt is not None and is_implicit(solver)
+        solver = make_solver(
+            solver,
+            newton_rtol=rtol_a if fixed_implicit else None,
+            newton_atol=atol_a if fixed_implicit else None,
+            norm=norm,
+            linear_solver=linear_solver,
+            dense_newton=dense_newton,
+        )
+    else:
+        name = type(solver).__name__
+    if dt is not None:
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt = {dt} s must be > 0")
+        controller = diffrax.ConstantStepSize()
+        step0 = dt
+    else:
+        # dtmin: a member whose state turns non-finite stops at once (with
+        # RESULTS.dt_min_reached) instead of shrinking its step until max_steps.
+        t_end = float(np.max(np.abs(np.asarray(ts)))) if not isinstance(ts, jax.core.Tracer) else 1.0
+        controller = diffrax.PIDController(
+            rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4,
+            dtmin=_DT_MIN * max(1.0, t_end), force_dtmin=False,
+        )
+        step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
+
+    meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
+    return Plan(ts, float(t0), solver, controller, float(step0), int(max_steps), bool(save_nodes), meter, name)
+
+
+_DT_MIN = 1e-9  # [s] smallest adaptive step, relative to max(1 s, end time)
 
 
 def _first_bad_time(ts, tension):
@@ -133,79 +260,19 @@ def simulate(
             the solve fails; with ``False`` inspect ``result`` instead (for
             ensembles). Under ``jit``/``vmap`` use ``throw=False``.
     """
-    if ts is None:
-        if duration is None:
-            raise ValueError("give the simulated duration [s] or the output times ts")
-        duration = float(duration)
-        if not np.isfinite(duration) or duration <= 0:
-            raise ValueError(f"duration = {duration} s must be a positive finite number")
-        if not (np.isfinite(dt_out) and dt_out > 0):
-            raise ValueError(f"dt_out = {dt_out} s must be > 0")
-        k = max(int(round(duration / dt_out)), 1)
-        ts = t0 + np.linspace(duration / k, duration, k)
-    ts = jnp.asarray(ts, dtype=float)
-    if ts.ndim != 1 or ts.shape[0] < 1:
-        raise ValueError("output times ts must be a non-empty 1-D array [s]")
-    if not isinstance(ts, jax.core.Tracer):
-        tsn = np.asarray(ts)
-        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
-            raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
-    if atol_velocity is None:
-        atol_velocity = 100.0 * float(atol)
-    for name, tol, unit, hi in (
-        ("rtol", rtol, "", 0.1),
-        ("atol", atol, " m", 0.1),
-        ("atol_velocity", atol_velocity, " m/s", 10.0),
-    ):
-        if not (1e-14 <= float(tol) <= hi):
-            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
-    norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
-    rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
-
-    if isinstance(solver, str):
-        name = solver
-        fixed_implicit = dt is not None and is_implicit(solver)
-        solver = make_solver(
-            solver,
-            newton_rtol=rtol_a if fixed_implicit else None,
-            newton_atol=atol_a if fixed_implicit else None,
-            norm=norm,
-            linear_solver=linear_solver,
-            dense_newton=dense_newton,
-        )
-    else:
-        name = type(solver).__name__
-    if dt is not None:
-        if not (np.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt = {dt} s must be > 0")
-        controller = diffrax.ConstantStepSize()
-        step0 = dt
-    else:
-        controller = diffrax.PIDController(
-            rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4
-        )
-        step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
-
+    p = plan(
+        duration, ts=ts, dt_out=dt_out, t0=t0, solver=solver, rtol=rtol, atol=atol,
+        atol_velocity=atol_velocity, dt=dt, dt0=dt0, max_steps=max_steps,
+        save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
+        progress=progress,
+    )
     if init is None:
         init = tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)
-    y0 = pack(init)
-    meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
-    sol = _integrate(scene, y0, ts, t0, solver, controller, step0, max_steps, save_nodes, meter)
-    outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
-    res = SimulationResult(
-        ts=ts,
-        tension_a=outs["tension_a"][:-1],
-        tension_b=outs["tension_b"][:-1],
-        force_a=outs["force_a"][:-1],
-        force_b=outs["force_b"][:-1],
-        positions=(tuple(p[:-1] for p in outs["positions"]) if save_nodes else None),
-        segment_tensions=(tuple(p[:-1] for p in outs["segment_tensions"]) if save_nodes else None),
-        final_state=unpack(jax.tree_util.tree_map(lambda a: a[-1], ys)),
-        num_steps=sol.stats["num_steps"],
-        num_accepted_steps=sol.stats["num_accepted_steps"],
-        num_rejected_steps=sol.stats["num_rejected_steps"],
-        result=sol.result,
+    res = _integrate(
+        scene, pack(init), p.ts, p.t0, p.solver, p.controller, p.dt0, p.max_steps,
+        p.save_nodes, p.meter,
     )
+    name = p.name
     if throw and not isinstance(res.num_steps, jax.core.Tracer):
         _raise_on_failure(res, name, max_steps)
     return res
@@ -220,6 +287,12 @@ def _raise_on_failure(res, name, max_steps):
     code = res.result
     if code == diffrax.RESULTS.max_steps_reached:
         cause = f"the step limit max_steps={max_steps} was reached (raise it, or loosen tolerances)"
+    elif code == diffrax.RESULTS.dt_min_reached:
+        cause = (
+            "the step size fell below its minimum (the state became non-finite, or a "
+            "snap load or slack line the method cannot resolve: check the inputs, try "
+            "tighter tolerances or more segments)"
+        )
     elif code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular:
         cause = "Newton did not converge even at the smallest step (stiff snap or slack line?)"
     else:

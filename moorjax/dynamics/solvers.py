@@ -53,7 +53,9 @@ class StateNorm(eqx.Module):
     velocity columns are multiplied by ``velocity_weight`` = atol / atol_velocity,
     so that with the controller's ``atol`` in metres, a velocity error of
     ``atol_velocity`` [m/s] counts as much as a position error of ``atol`` [m].
-    An array field: changing it does not recompile.
+    A NaN anywhere makes the norm +inf, so the step-size controller rejects the
+    step and shrinks it (diffrax would otherwise propagate a NaN step size and
+    spin until ``max_steps``). An array field: changing it does not recompile.
     """
 
     velocity_weight: Array
@@ -65,7 +67,8 @@ class StateNorm(eqx.Module):
             return jnp.asarray(0.0)
         sq = sum(jnp.sum(jnp.abs(x * w) ** 2) for x in leaves)
         size = sum(x.size for x in leaves)
-        return jnp.sqrt(sq / size)
+        value = jnp.sqrt(sq / size)
+        return jnp.where(jnp.isnan(value), jnp.inf, value)
 
 
 def make_solver(

@@ -4,10 +4,19 @@ Solver state: a tuple with one (n_i − 1, 6) array per line, the free nodes'
 [position, velocity] side by side. This node-major layout keeps each line's
 Jacobian block-tridiagonal (6×6 blocks), which the block-tridiagonal Newton solve
 exploits; a system of several lines stacks into one larger band.
+
+Lines of one structure (same segment count, end types, force terms and element)
+are evaluated together: they are grouped at trace time, stacked, and their
+accelerations computed by one ``vmap`` — a four-line spread with equal
+discretisation costs about one line's worth of XLA operations, not four. Lines of
+different structure fall into separate groups automatically.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
+import jax
 import jax.numpy as jnp
 
 from ..model.line import LineState
@@ -23,13 +32,41 @@ def unpack(y) -> tuple:
     return tuple(LineState(r=q[..., :3], v=q[..., 3:]) for q in y)
 
 
+def _line_rate(line, q, env, t):
+    r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+    acc = line.element.accelerations(line, env, t, r, v)
+    return jnp.concatenate([q[:, 3:], acc], axis=-1)
+
+
+def _structure_key(line):
+    """Lines with equal keys can be stacked (labels aside)."""
+    canonical = dataclasses.replace(line, label="")
+    leaves, treedef = jax.tree_util.tree_flatten(canonical)
+    return treedef, tuple((jnp.shape(x), jnp.result_type(x)) for x in leaves)
+
+
+def line_groups(lines) -> list[list[int]]:
+    """Indices of the lines, grouped by structure (first-appearance order)."""
+    groups: dict = {}
+    for i, line in enumerate(lines):
+        groups.setdefault(_structure_key(line), []).append(i)
+    return list(groups.values())
+
+
 def vector_field(t, y, scene):
     """dy/dt for every line: (velocity, acceleration) of the free nodes."""
-    out = []
-    for line, q in zip(scene.lines, y):
-        r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-        acc = line.element.accelerations(line, scene.env, t, r, v)
-        out.append(jnp.concatenate([q[:, 3:], acc], axis=-1))
+    out = [None] * len(scene.lines)
+    for idx in line_groups(scene.lines):
+        if len(idx) == 1:
+            i = idx[0]
+            out[i] = _line_rate(scene.lines[i], y[i], scene.env, t)
+            continue
+        members = [dataclasses.replace(scene.lines[i], label="") for i in idx]
+        stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *members)
+        q = jnp.stack([y[i] for i in idx])
+        rates = jax.vmap(_line_rate, in_axes=(0, 0, None, None))(stacked, q, scene.env, t)
+        for k, i in enumerate(idx):
+            out[i] = rates[k]
     return tuple(out)
 
 

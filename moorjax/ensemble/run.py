@@ -1,0 +1,190 @@
+"""Ensembles: many scenes of one structure as one vmapped, compiled computation.
+
+``simulate_ensemble`` stacks the members (see :mod:`moorjax.ensemble.batch`),
+finds each member's static equilibrium (vmapped), and integrates all of them
+with one ``vmap`` of the same pure function :func:`moorjax.dynamics.simulate`
+runs. Results come back as a :class:`~moorjax.dynamics.SimulationResult` whose
+arrays have a leading member axis.
+
+Failure isolation: every member has its own step size, Newton iterations and
+diffrax result code. A member whose state turns non-finite stops at once with
+``dt_min_reached``; its outputs are non-finite but no other member's are
+touched (vmapped arithmetic is elementwise along the member axis). ``status``
+summarises each member.
+
+Devices: with ``devices`` (default: all local devices) the member axis is
+sharded with ``jax.sharding`` (``NamedSharding`` over a 1-D mesh named
+``"member"``); XLA then runs each device's members locally. On several hosts,
+call ``jax.distributed.initialize()`` on every process first: ``jax.devices()``
+then lists the devices of all hosts and the same code shards across them
+(each process must build the same member list).
+
+Compilation: the compiled function depends only on the structure (segment
+counts, force terms, solver, tolerances' *types*, member count per call), so a
+second call with other parameter values does not recompile; :data:`TRACES`
+counts traces (used by the tests).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+from ..dynamics.simulate import SimulationResult, _solve, plan
+from ..dynamics.vector_field import pack
+from ..statics.fem import _check_geometry, solve_line_statics
+from . import batch as _batch
+
+#: number of times the batched integrator has been traced (compiled) so far
+TRACES = {"ensemble": 0, "statics": 0}
+
+STATUS_OK = "ok"
+# diffrax result codes by value -> short name (e.g. "dt_min_reached")
+_RESULT_NAMES = {int(item._value): name for name, item in diffrax.RESULTS._name_to_item.items()}
+
+
+def _traced_solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, meter):
+    TRACES["ensemble"] += 1  # runs at trace time only
+    return _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, meter)
+
+
+_AXES = (0, 0) + (None,) * 8
+_batched_solve = eqx.filter_jit(eqx.filter_vmap(_traced_solve, in_axes=_AXES))
+
+
+def _statics_states(scene, t0):
+    TRACES["statics"] += 1
+    return tuple(
+        solve_line_statics(line, scene.env, t0, throw=False).state() for line in scene.lines
+    )
+
+
+def _statics_converged(scene, t0):
+    return jnp.stack(
+        [solve_line_statics(line, scene.env, t0, throw=False).converged for line in scene.lines]
+    )
+
+
+_batched_statics = eqx.filter_jit(
+    eqx.filter_vmap(lambda s, t0: (_statics_states(s, t0), _statics_converged(s, t0)),
+                    in_axes=(0, None))
+)
+
+
+def equilibrium(scenes, t0: float = 0.0):
+    """Static equilibrium of every member (vmapped): (stacked line states, converged).
+
+    ``converged`` is (members, lines) bool; geometry errors (an end below the
+    seabed, a line too short for its ends) are raised for the first offending
+    member before anything runs.
+    """
+    return _batched_statics(scenes, float(t0))
+
+
+def _shard(tree, devices):
+    mesh = Mesh(np.asarray(devices), ("member",))
+    spec = NamedSharding(mesh, PartitionSpec("member"))
+    return jax.tree_util.tree_map(
+        lambda x: jax.device_put(x, spec) if isinstance(x, jax.Array) else x, tree
+    )
+
+
+def _pad(tree, n_total):
+    """Repeat the last member so the batch has n_total members."""
+    n = _batch.size(tree)
+    if n == n_total:
+        return tree
+    index = np.concatenate([np.arange(n), np.full(n_total - n, n - 1)])
+    return _batch.take(tree, index)
+
+
+def status(res: SimulationResult) -> np.ndarray:
+    """Per-member outcome: ``"ok"`` or the reason (diffrax message or non-finite output)."""
+    codes = np.atleast_1d(np.asarray(res.result._value))
+    finite = np.all(np.isfinite(np.asarray(res.tension_b)).reshape(codes.shape[0], -1), axis=1)
+    out = []
+    for code, fin in zip(codes, finite):
+        if code != diffrax.RESULTS.successful._value:
+            out.append(_RESULT_NAMES.get(int(code), f"diffrax result {int(code)}"))
+        elif not fin:
+            out.append("non-finite output")
+        else:
+            out.append(STATUS_OK)
+    return np.asarray(out, dtype=object)
+
+
+def simulate_ensemble(
+    scenes,
+    duration=None,
+    *,
+    init=None,
+    devices: Sequence | str | None = "all",
+    **settings,
+) -> SimulationResult:
+    """Integrate many scenes of one structure at once.
+
+    Args:
+        scenes: a sequence of :class:`moorjax.Scene` (stacked here, with a clear
+            error naming the first field whose structure differs), or an already
+            stacked scene (every array leaf with a leading member axis, e.g. from
+            :func:`moorjax.ensemble.stack`).
+        duration, settings: as :func:`moorjax.dynamics.simulate` (``solver``,
+            ``rtol``, ``atol``, ``atol_velocity``, ``dt``, ``dt_out``, ``ts``,
+            ``save_nodes``, ...; ``throw`` and ``progress`` are not available).
+        init: stacked tuple of :class:`LineState` (default: each member's static
+            equilibrium at ``t0``, vmapped).
+        devices: ``"all"`` (default) shards members over all local devices when
+            there are several; a list of devices; or ``None`` for the default
+            device only.
+
+    Returns:
+        a :class:`SimulationResult` with a leading member axis on every array
+        (``result`` per member; see :func:`status`).
+    """
+    for bad in ("throw", "progress"):
+        if bad in settings:
+            raise ValueError(f"simulate_ensemble does not take {bad!r}; inspect status(result)")
+    if isinstance(scenes, (list, tuple)):
+        for i, s in enumerate(scenes):
+            for line in s.lines:
+                try:
+                    _check_geometry(line, s.env, settings.get("t0", 0.0))
+                except ValueError as exc:
+                    raise ValueError(f"ensemble member {i}: {exc}") from None
+        scenes = _batch.stack(scenes, name="scene")
+    n = _batch.size(scenes)
+    p = plan(duration, **settings)
+    if init is None:
+        init, ok = equilibrium(scenes, p.t0)
+        ok = np.asarray(ok)
+        if not ok.all():
+            bad = np.argwhere(~ok)[0]
+            raise RuntimeError(
+                f"ensemble member {bad[0]}: static solve of line {bad[1]} did not converge; "
+                "check its geometry or give init"
+            )
+    y0 = pack(init)
+    if devices == "all":
+        devices = jax.local_devices()
+    devices = list(devices) if devices else []
+    n_run = n
+    if len(devices) > 1:
+        n_run = -(-n // len(devices)) * len(devices)
+        scenes, y0 = _pad(scenes, n_run), _pad(y0, n_run)
+        scenes, y0 = _shard(scenes, devices), _shard(y0, devices)
+    res = _batched_solve(
+        scenes, y0, p.ts, p.t0, p.solver, p.controller, p.dt0, p.max_steps, p.save_nodes,
+        diffrax.NoProgressMeter(),
+    )
+    if n_run != n:
+        res = jax.tree_util.tree_map(
+            lambda x: x[:n] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == n_run else x,
+            res,
+        )
+    return res
