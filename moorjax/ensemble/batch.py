@@ -25,6 +25,13 @@ def _is_array(x):
     return isinstance(x, (jax.Array, np.ndarray, np.generic))
 
 
+def _as_array(x):
+    """Python numbers count as 0-d arrays (they stack like them)."""
+    if isinstance(x, (bool, int, float)) and not isinstance(x, bool):
+        return np.asarray(x, dtype=float)
+    return x
+
+
 def structure_difference(a, b, path: str = "member") -> str | None:
     """The first structural difference between two pytrees, as text (``None`` if none).
 
@@ -32,6 +39,7 @@ def structure_difference(a, b, path: str = "member") -> str | None:
     (module types, static fields such as ``n_segments``, present/absent optional
     terms) must be equal.
     """
+    a, b = _as_array(a), _as_array(b)
     if a is None or b is None:
         if (a is None) != (b is None):
             return f"{path}: present in one member, absent (None) in the other"
@@ -41,7 +49,9 @@ def structure_difference(a, b, path: str = "member") -> str | None:
             return f"{path}: an array in one member, {type(b if _is_array(a) else a).__name__} in the other"
         if a.shape != b.shape:
             return f"{path}: shape {a.shape} vs {b.shape}"
-        if jnp.result_type(a) != jnp.result_type(b):
+        if jnp.issubdtype(jnp.result_type(a), jnp.floating) != jnp.issubdtype(
+            jnp.result_type(b), jnp.floating
+        ):
             return f"{path}: dtype {a.dtype} vs {b.dtype}"
         return None
     if type(a) is not type(b):
@@ -74,8 +84,6 @@ def structure_difference(a, b, path: str = "member") -> str | None:
             if d:
                 return d
         return None
-    if isinstance(a, (int, float, complex, bool)):
-        return None  # Python scalars become arrays when stacked
     if a != b:
         return f"{path}: {a!r} vs {b!r}"
     return None

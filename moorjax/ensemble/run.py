@@ -27,6 +27,7 @@ counts traces (used by the tests).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 
 import diffrax
@@ -138,7 +139,8 @@ def simulate_ensemble(
             ``rtol``, ``atol``, ``atol_velocity``, ``dt``, ``dt_out``, ``ts``,
             ``save_nodes``, ...; ``throw`` and ``progress`` are not available).
         init: stacked tuple of :class:`LineState` (default: each member's static
-            equilibrium at ``t0``, vmapped).
+            equilibrium at ``t0``, vmapped; a member whose statics fails is
+            warned about and reported failed, the others run).
         devices: ``"all"`` (default) shards members over all local devices when
             there are several; a list of devices; or ``None`` for the default
             device only.
@@ -162,12 +164,17 @@ def simulate_ensemble(
     p = plan(duration, **settings)
     if init is None:
         init, ok = equilibrium(scenes, p.t0)
-        ok = np.asarray(ok)
-        if not ok.all():
-            bad = np.argwhere(~ok)[0]
-            raise RuntimeError(
-                f"ensemble member {bad[0]}: static solve of line {bad[1]} did not converge; "
-                "check its geometry or give init"
+        failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))
+        if failed.size:
+            # such a member must not stop the others: it starts from NaN, so it
+            # stops at its first step and its status says it failed
+            warnings.warn(
+                f"ensemble members {failed.tolist()}: static equilibrium did not converge "
+                "(check their parameters and geometry); they are reported as failed"
+            )
+            bad = jnp.zeros(n, dtype=bool).at[failed].set(True)
+            init = jax.tree_util.tree_map(
+                lambda x: jnp.where(bad.reshape((n,) + (1,) * (x.ndim - 1)), jnp.nan, x), init
             )
     y0 = pack(init)
     if devices == "all":

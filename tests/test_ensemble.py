@@ -1,0 +1,186 @@
+"""Ensembles: vmapped runs equal single runs, failures stay isolated, no recompiles,
+sharding, chunked storage with resume, structure errors, the CLI."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import moorjax as mj
+from moorjax.cli import main
+from moorjax.dynamics import simulate
+from moorjax.dynamics.vector_field import _line_rate, line_groups, pack, vector_field
+from moorjax.ensemble import StructureMismatchError, simulate_ensemble, stack, status
+from moorjax.ensemble.run import TRACES
+from moorjax.ensemble.store import load, run_chunked
+
+# tight tolerances: members differ from single runs only by roundoff-driven Newton
+# termination decisions, whose effect is of the order of the Newton tolerance
+SETTINGS = dict(solver="kvaerno3", rtol=1e-10, atol=1e-10, dt_out=0.1)
+DURATION = 2.0
+
+
+def scene(cd=1.6, ea=1.5e8, amp=1.0, n=6, drag=True):
+    lt = mj.LineType(0.12, 10.8, ea, 1.771e5,
+                     mj.MorisonDrag(cd, 0.05) if drag else None, mj.AddedMass(1.0, 0.0))
+    env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
+    line = mj.Line(lt, 110.0, n, mj.FixedEnd([-80.5168, 0, -80]),
+                   mj.SinePath([0, 0, -5.0], [amp, 0, 0], 8.0))
+    return mj.Scene([line], env)
+
+
+MEMBERS = [scene(1.2, 1.4e8, 0.5), scene(1.6, 1.5e8, 1.0), scene(2.0, 1.7e8, 1.5)]
+
+
+@pytest.fixture(scope="module")
+def batch_result():
+    return simulate_ensemble(MEMBERS, DURATION, **SETTINGS)
+
+
+def test_vmapped_ensemble_equals_members_run_one_by_one(batch_result):
+    res = batch_result
+    assert res.tension_b.shape == (3, 20, 1)
+    assert list(status(res)) == ["ok"] * 3
+    for i, s in enumerate(MEMBERS):
+        single = simulate(s, DURATION, **SETTINGS)
+        for field in ("tension_a", "tension_b", "force_b"):
+            a, b = np.asarray(getattr(res, field)[i]), np.asarray(getattr(single, field))
+            np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10 * np.abs(b).max())
+        assert int(res.num_steps[i]) == int(single.num_steps)
+    # members really differ (amplitude 0.5 m vs 1.5 m)
+    assert np.ptp(res.tension_b[2]) > 2 * np.ptp(res.tension_b[0])
+
+
+def test_new_parameter_values_do_not_recompile(batch_result):
+    before = dict(TRACES)
+    other = [scene(1.0, 1.3e8, 0.7), scene(1.1, 1.6e8, 1.2), scene(1.9, 1.5e8, 0.3)]
+    res = simulate_ensemble(other, DURATION, **SETTINGS)
+    assert TRACES == before, "a second call with other values retraced"
+    assert list(status(res)) == ["ok"] * 3
+
+
+def test_failing_member_is_reported_and_leaves_others_intact(batch_result):
+    bad = eqx.tree_at(lambda s: s.lines[0].line_type.drag.cd_normal, MEMBERS[1], jnp.nan)
+    with pytest.warns(UserWarning, match=r"members \[1\]: static equilibrium"):
+        res = simulate_ensemble([MEMBERS[0], bad, MEMBERS[2]], DURATION, **SETTINGS)
+    st = status(res)
+    assert st[0] == "ok" and st[2] == "ok"
+    assert st[1] != "ok"  # e.g. dt_min_reached: it stopped at once
+    assert int(res.num_steps[1]) < 50
+    for i in (0, 2):
+        np.testing.assert_allclose(np.asarray(res.tension_b[i]),
+                                   np.asarray(batch_result.tension_b[i]), rtol=1e-10)
+
+
+def test_structure_mismatch_names_the_field():
+    with pytest.raises(StructureMismatchError, match="n_segments: 6 vs 8"):
+        stack([scene(), scene(n=8)])
+    with pytest.raises(StructureMismatchError, match="drag"):
+        simulate_ensemble([scene(), scene(drag=False)], 1.0)
+    fixed = eqx.tree_at(lambda s: s.lines[0].end_b, scene(), mj.FixedEnd([0, 0, -5.0]))
+    with pytest.raises(StructureMismatchError, match="end_b: SinePath vs FixedEnd"):
+        stack([scene(), fixed])
+
+
+def test_chunked_run_matches_and_resumes(tmp_path, batch_result):
+    out = str(tmp_path / "ens")
+    calls = []
+    data = run_chunked(MEMBERS, out, DURATION, chunk_size=2, histories=True,
+                       on_chunk=lambda k, n: calls.append(k), **SETTINGS)
+    assert calls == [0, 1]
+    np.testing.assert_allclose(data["tension_b"], np.asarray(batch_result.tension_b), rtol=1e-10)
+    np.testing.assert_allclose(data["stat_tension_b_max"],
+                               np.asarray(batch_result.tension_b).max(axis=1), rtol=1e-12)
+    assert list(data["status"]) == ["ok"] * 3
+    # a crash lost chunk 1: the rerun computes only that chunk
+    os.remove(os.path.join(out, "chunks", "chunk_00001.npz"))
+    calls.clear()
+    again = run_chunked(MEMBERS, out, DURATION, chunk_size=2, histories=True,
+                        on_chunk=lambda k, n: calls.append(k), **SETTINGS)
+    assert calls == [1]
+    np.testing.assert_allclose(again["tension_b"], data["tension_b"], rtol=1e-12)
+    np.testing.assert_allclose(load(out)["tension_b"], data["tension_b"], rtol=1e-12)
+    # a different ensemble is refused, not mixed in
+    with pytest.raises(ValueError, match="different ensemble"):
+        run_chunked(MEMBERS[:2], out, DURATION, chunk_size=2, **SETTINGS)
+
+
+def test_lines_of_equal_structure_are_grouped():
+    lt = mj.LineType(0.12, 10.8, 1.5e8, 1.771e5, mj.MorisonDrag(1.6, 0.05), mj.AddedMass(1.0, 0.0))
+    env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
+    lines = []
+    for k in range(4):
+        c, s = np.cos(np.pi / 2 * k), np.sin(np.pi / 2 * k)
+        lines.append(mj.Line(lt, 110.0 + k, 6, mj.FixedEnd([-80.5 * c, -80.5 * s, -80]),
+                             mj.FixedEnd([2 * c, 2 * s, -5.0]), label=str(k + 1)))
+    lines.append(mj.Line(lt, 110.0, 4, mj.FixedEnd([-80.5, 0, -80]), mj.FixedEnd([0, 0, -5.0]),
+                         label="9"))
+    sc = mj.Scene(lines, env)
+    assert line_groups(sc.lines) == [[0, 1, 2, 3], [4]]
+    y = tuple(q.at[:, 3:].set(0.2) for q in pack([ln.straight_state() for ln in lines]))
+    out = vector_field(0.3, y, sc)
+    for ln, q, o in zip(lines, y, out):
+        ref = _line_rate(ln, q, env, 0.3)
+        np.testing.assert_allclose(np.asarray(o), np.asarray(ref), rtol=1e-12,
+                                   atol=1e-12 * float(np.abs(ref).max()))
+
+
+SHARDED = textwrap.dedent(
+    """
+    import os, sys, json
+    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=4"
+    import jax, numpy as np
+    sys.path.insert(0, sys.argv[1])
+    import test_ensemble as t
+    from moorjax.ensemble import simulate_ensemble
+    assert len(jax.local_devices()) == 4, jax.local_devices()
+    members = t.MEMBERS + [t.scene(1.4, 1.45e8, 0.8), t.scene(1.8, 1.55e8, 1.2)]  # 5: padded to 8
+    fast = dict(solver="heun", dt=2e-3, dt_out=0.1)  # sharding, not the solver, is under test
+    a = simulate_ensemble(members, t.DURATION, devices="all", **fast)
+    shards = len(a.tension_b.sharding.device_set) if hasattr(a.tension_b, "sharding") else 1
+    b = simulate_ensemble(members, t.DURATION, devices=None, **fast)
+    print(json.dumps(dict(shape=list(a.tension_b.shape), devices=shards,
+        diff=float(np.max(np.abs(np.asarray(a.tension_b) - np.asarray(b.tension_b)))),
+        scale=float(np.max(np.abs(np.asarray(b.tension_b)))))))
+    """
+)
+
+
+def test_sharded_over_four_cpu_devices_equals_unsharded():
+    here = os.path.dirname(os.path.abspath(__file__))
+    proc = subprocess.run([sys.executable, "-c", SHARDED, here], capture_output=True, text=True,
+                          timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["shape"] == [5, 20, 1]
+    assert out["devices"] == 4
+    assert out["diff"] <= 1e-10 * out["scale"]
+
+
+def test_cli_ensemble_summary_and_bad_vary(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    rc = main(["ensemble", "example:taut_polyester", "--duration", "1", "--segments", "6",
+               "--vary", "Cd=1.2,2.0", "--vary", "L1.EA=1.4e8,1.6e8", "--out", str(out),
+               "--histories", "--solver", "kvaerno3"])
+    assert rc == 0
+    rows = (out / "summary.csv").read_text().strip().splitlines()
+    assert rows[0].split(",")[:5] == ["member", "Cd", "L1.EA", "status", "steps"]
+    assert "L1_tension_b_max" in rows[0] and "L1_tension_a_std" in rows[0]
+    assert len(rows) == 5 and all(",ok," in r for r in rows[1:])
+    tmax = [float(r.split(",")[rows[0].split(",").index("L1_tension_b_max")]) for r in rows[1:]]
+    assert tmax[1] > tmax[0]  # stiffer line, higher static tension
+    assert len(list((out / "histories").iterdir())) == 4
+    capsys.readouterr()
+    for vary, msg in (("Foo=1", "valid names"), ("Cd=abc", "not a number"),
+                      ("EA=-1", "must be finite and > 0"), ("L7.Cd=1", "no line 7"),
+                      ("Cd", "NAME=v1")):
+        rc = main(["ensemble", "example:taut_polyester", "--duration", "1", "--segments", "6",
+                   "--vary", vary, "--out", str(tmp_path / "bad")])
+        assert rc == 2
+        assert msg in capsys.readouterr().err
