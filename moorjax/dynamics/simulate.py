@@ -102,10 +102,10 @@ class Plan(eqx.Module):
     """Validated, scene-independent settings of a simulation (see :func:`plan`)."""
 
     ts: Array
-    t0: float = eqx.field(static=True)
+    t0: Array  # arrays, so other start times and first steps do not recompile
     solver: Any
     controller: Any
-    dt0: float = eqx.field(static=True)
+    dt0: Array
     max_steps: int = eqx.field(static=True)
     save_nodes: bool = eqx.field(static=True)
     meter: Any
@@ -136,12 +136,19 @@ def plan(
     dense_newton: bool = False,
     linear_solver: str = "reduced",
     progress: bool = False,
+    scene=None,
 ) -> Plan:
     """Check the settings of :func:`simulate` (same arguments) and build the solver.
 
     Raises ``ValueError`` naming the offending setting. Used by :func:`simulate`
-    and by ensembles, which run one plan on many scenes.
+    and by ensembles, which run one plan on many scenes. With ``scene``, a
+    structured linear solver is replaced by the dense one when some line's
+    element does not have a block-tridiagonal Jacobian (consistent mass).
     """
+    if scene is not None and linear_solver in ("reduced", "block") and not all(
+        line.element.banded_jacobian for line in scene.lines
+    ):
+        linear_solver = "dense"
     if ts is None:
         if duration is None:
             raise ValueError("give the simulated duration [s] or the output times ts")
@@ -150,8 +157,12 @@ def plan(
             raise ValueError(f"duration = {duration} s must be a positive finite number")
         if not (np.isfinite(dt_out) and dt_out > 0):
             raise ValueError(f"dt_out = {dt_out} s must be > 0")
-        k = max(int(round(duration / dt_out)), 1)
-        ts = t0 + np.linspace(duration / k, duration, k)
+        # every dt_out exactly, ending with the duration itself
+        k = int(np.floor(duration / dt_out * (1 + 1e-12)))
+        ts = dt_out * np.arange(1, k + 1)
+        if k == 0 or duration - ts[-1] > 1e-9 * duration:
+            ts = np.append(ts, duration)
+        ts = t0 + ts
     ts = jnp.asarray(ts, dtype=float)
     if ts.ndim != 1 or ts.shape[0] < 1:
         raise ValueError("output times ts must be a non-empty 1-D array [s]")
@@ -200,7 +211,10 @@ def plan(
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
 
     meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
-    return Plan(ts, float(t0), solver, controller, float(step0), int(max_steps), bool(save_nodes), meter, name)
+    return Plan(
+        ts, jnp.asarray(float(t0)), solver, controller, jnp.asarray(float(step0)),
+        int(max_steps), bool(save_nodes), meter, name,
+    )
 
 
 _DT_MIN = 1e-9  # [s] smallest adaptive step, relative to max(1 s, end time)
@@ -253,7 +267,9 @@ def simulate(
         save_nodes: also return node positions and segment tensions.
         linear_solver: Newton's linear solve: ``"reduced"`` (default; positions
             eliminated, 3×3 block-tridiagonal), ``"block"`` (6×6 blocks) or
-            ``"dense"`` (dense LU, O(n³); for comparison).
+            ``"dense"`` (dense LU, O(n³); for comparison). Lines with the
+            consistent mass (Eq. 2) have a dense Jacobian (M⁻¹K), so they always
+            use ``"dense"``.
         dense_newton: same as ``linear_solver="dense"``.
         progress: print a text progress meter.
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if
@@ -264,7 +280,7 @@ def simulate(
         duration, ts=ts, dt_out=dt_out, t0=t0, solver=solver, rtol=rtol, atol=atol,
         atol_velocity=atol_velocity, dt=dt, dt0=dt0, max_steps=max_steps,
         save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
-        progress=progress,
+        progress=progress, scene=scene,
     )
     if init is None:
         init = tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)

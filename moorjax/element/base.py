@@ -16,6 +16,13 @@ import equinox as eqx
 class AbstractElement(eqx.Module):
     """A finite-element discretisation of the cable equation."""
 
+    @property
+    def banded_jacobian(self) -> bool:
+        """Whether a free node's acceleration depends only on itself and its two
+        neighbours (a block-tridiagonal Jacobian, which the structured Newton
+        solves exploit). Elements coupling further must return ``False``."""
+        return True
+
     @abc.abstractmethod
     def nodal_forces(self, line, env, r, v):
         """All non-inertial forces on every node (n+1, 3) [N], ends included."""

@@ -43,6 +43,10 @@ class LinearElement(AbstractElement):
 
     mass: AbstractMass = NodalMass()
 
+    @property
+    def banded_jacobian(self) -> bool:
+        return self.mass.banded
+
     # -- geometry -------------------------------------------------------------
     @staticmethod
     def _segments(r):

@@ -9,6 +9,7 @@ gives).
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -39,6 +40,9 @@ def _segment_mass_tensors(line, env, tangent, stretched):
 class AbstractMass(eqx.Module):
     """Solves ``M a = f`` for the free-node accelerations."""
 
+    #: M⁻¹ keeps the Jacobian block-tridiagonal (nodal mass) or not (consistent)
+    banded: ClassVar[bool] = True
+
     @abc.abstractmethod
     def accelerations(self, line, env, t, force, tangent, stretched):
         """Free-node accelerations (n−1, 3) [m/s²] from all-node forces (n+1, 3) [N]."""
@@ -65,7 +69,10 @@ class ConsistentMass(AbstractMass):
     Each element contributes μ_j/6·[[2, 1], [1, 2]] ⊗ its 3×3 inertia, which
     couples neighbouring nodes. The prescribed end accelerations enter the first
     and last free-node equations. Solved by a block-tridiagonal LU (O(n)).
+    M⁻¹ is dense, so the dynamics' Newton solves use a dense LU for such lines.
     """
+
+    banded: ClassVar[bool] = False
 
     def accelerations(self, line, env, t, force, tangent, stretched):
         mu = _segment_mass_tensors(line, env, tangent, stretched) / 6.0

@@ -161,7 +161,7 @@ def simulate_ensemble(
                     raise ValueError(f"ensemble member {i}: {exc}") from None
         scenes = _batch.stack(scenes, name="scene")
     n = _batch.size(scenes)
-    p = plan(duration, **settings)
+    p = plan(duration, scene=_batch.member(scenes, 0), **settings)
     if init is None:
         init, ok = equilibrium(scenes, p.t0)
         failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))

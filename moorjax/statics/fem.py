@@ -202,6 +202,21 @@ def solve_line_statics(
             ``converged``).
     """
     _check_geometry(line, env, t)
+    out = _solve_core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
+    if throw:
+        out = eqx.error_if(
+            out,
+            jnp.invert(out.converged),
+            "static solve of a line did not converge (Newton failed or left a force "
+            "imbalance); check the geometry (can the line reach its ends?), or give "
+            "`init`, more `max_steps` or looser tolerances",
+        )
+    return out
+
+
+@eqx.filter_jit
+def _solve_core(line, env, t, init, rtol, atol, max_steps):
+    """The jitted static solve: compiled once per line structure, reused for any values."""
     r0 = initial_guess(line, env, t).r if init is None else init.r
     fn = _residual(line, env, t)
     # 1) a damped Newton (backtracking on the residual) finds the equilibrium
@@ -244,14 +259,6 @@ def solve_line_statics(
         iterations=damped_steps + sol.stats["num_steps"],
         max_residual=max_res,
     )
-    if throw:
-        out = eqx.error_if(
-            out,
-            jnp.invert(converged),
-            "static solve of a line did not converge (Newton failed or left a force "
-            "imbalance); check the geometry (can the line reach its ends?), or give "
-            "`init`, more `max_steps` or looser tolerances",
-        )
     return out
 
 
