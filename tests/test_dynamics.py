@@ -94,3 +94,15 @@ def test_failure_is_reported_with_time():
         simulate(scene, 2.0, solver="euler", dt=0.05, dt_out=0.1)
     res = simulate(scene, 2.0, solver="euler", dt=0.05, dt_out=0.1, throw=False)
     assert not np.all(np.isfinite(np.asarray(res.tension_b)))
+
+
+def test_newton_iterations_are_counted():
+    """count_newton: ESDIRK stages need at least 2 very-chord iterations each."""
+    scene = case_b_scene(6)
+    res = simulate(scene, 0.5, solver="kvaerno3", count_newton=True)
+    steps = int(res.num_steps)
+    assert int(res.num_evaluations) == int(res.num_newton_iterations) + 2 * steps
+    assert int(res.num_newton_iterations) >= 2 * 3 * steps  # 3 implicit stages
+    plain = simulate(scene, 0.5, solver="kvaerno3")
+    assert plain.num_newton_iterations is None
+    np.testing.assert_allclose(np.asarray(plain.tension_b), np.asarray(res.tension_b), rtol=1e-12)

@@ -15,6 +15,7 @@ from typing import Any
 import diffrax
 import equinox as eqx
 import jax
+import jax.experimental
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
@@ -37,6 +38,9 @@ class SimulationResult(eqx.Module):
         final_state: tuple of :class:`LineState` at the last time reached.
         num_steps, num_accepted_steps, num_rejected_steps: solver statistics.
         result: diffrax result code (0 = success); see :meth:`succeeded`.
+        num_newton_iterations: Newton iterations of all implicit stages (only
+            with ``simulate(..., count_newton=True)``, else ``None``).
+        num_evaluations: vector-field evaluations (with ``count_newton``).
     """
 
     ts: Array
@@ -51,14 +55,31 @@ class SimulationResult(eqx.Module):
     num_accepted_steps: Array
     num_rejected_steps: Array
     result: Any
+    num_newton_iterations: Any = None
+    num_evaluations: Any = None
 
     def succeeded(self):
         return self.result == diffrax.RESULTS.successful
 
 
-def _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, progress):
+#: host-side count of vector-field evaluations (diagnostic runs only)
+_EVALUATIONS = [0]
+
+
+def _bump():
+    _EVALUATIONS[0] += 1
+
+
+def _counted_vector_field(t, y, scene):
+    """The vector field, counting its evaluations on the host (slow: a callback each)."""
+    jax.experimental.io_callback(_bump, None, ordered=False)
+    return vector_field(t, y, scene)
+
+
+def _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, progress,
+           count=False):
     """One integration as a pure function of arrays (jit-, vmap- and grad-able)."""
-    term = diffrax.ODETerm(vector_field)
+    term = diffrax.ODETerm(_counted_vector_field if count else vector_field)
     saveat = diffrax.SaveAt(
         ts=ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)
     )
@@ -245,6 +266,7 @@ def simulate(
     linear_solver: str = "reduced",
     progress: bool = False,
     throw: bool = True,
+    count_newton: bool = False,
 ) -> SimulationResult:
     """Integrate a scene in time.
 
@@ -275,6 +297,12 @@ def simulate(
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if
             the solve fails; with ``False`` inspect ``result`` instead (for
             ensembles). Under ``jit``/``vmap`` use ``throw=False``.
+        count_newton: count vector-field evaluations and Newton iterations
+            (a diagnostic: a host callback per evaluation slows the run). For
+            the implicit methods each step costs one evaluation at its start
+            (the explicit first stage; implicit Euler's error estimate) and one
+            for the Jacobian's linearisation point; every other evaluation is
+            a Newton iteration.
     """
     p = plan(
         duration, ts=ts, dt_out=dt_out, t0=t0, solver=solver, rtol=rtol, atol=atol,
@@ -284,10 +312,21 @@ def simulate(
     )
     if init is None:
         init = tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)
+    _EVALUATIONS[0] = 0
     res = _integrate(
         scene, pack(init), p.ts, p.t0, p.solver, p.controller, p.dt0, p.max_steps,
-        p.save_nodes, p.meter,
+        p.save_nodes, p.meter, bool(count_newton),
     )
+    if count_newton:
+        jax.block_until_ready(res.tension_b)
+        evals = _EVALUATIONS[0]
+        steps = int(res.num_steps)
+        implicit = isinstance(p.solver, diffrax.AbstractImplicitSolver)
+        newton = evals - 2 * steps if implicit else 0
+        res = eqx.tree_at(
+            lambda r: (r.num_newton_iterations, r.num_evaluations), res,
+            (jnp.asarray(newton), jnp.asarray(evals)), is_leaf=lambda x: x is None,
+        )
     name = p.name
     if throw and not isinstance(res.num_steps, jax.core.Tracer):
         _raise_on_failure(res, name, max_steps)
