@@ -1,166 +1,271 @@
 """Work–precision: moorjax against MoorDyn on reference cases A and B.
 
 Both codes run in this process on the same exact-sine fairlead motion, starting
-from static equilibrium. For each run: wall time per simulated second (moorjax:
-second call, compile time reported separately; MoorDyn: stepping loop only) and
-the RMS fairlead-tension error relative to the converged MoorDyn N=160 reference,
-divided by the reference's standard deviation.
+from static equilibrium. For each run: wall (and CPU) time per simulated second
+(moorjax: second of two identical calls, compile time and the static solve
+reported separately; MoorDyn: stepping loop only), the RMS end-B tension error
+against the converged MoorDyn N=160 reference divided by the reference's
+standard deviation, and the number of steps.
 
-    python benchmarks/vs_moordyn.py [--cases A B] [--duration 60] [--quick]
+- MoorDyn: rk2, rk4 and midpoint5 (MoorDyn's k=0.5 implicit Euler, 5
+  iterations) at N = 10 … 80 and the largest stable dtM and half of it, as
+  listed in the reference cost table ``moordyn_cost_error.csv``;
+- moorjax: kvaerno3 and kvaerno5 (adaptive) at N = 10, 20, 40, 80 and tolerance
+  pairs (rtol, atol [m]) = (1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)
+  (``atol_velocity`` = 100·atol m/s, moorjax's default); implicit_euler with
+  fixed steps; heun with fixed steps at MoorDyn's RK2 stability limit for that N
+  (and half of it).
+
+Then the cheapest run of each code (and of each method) at ≤ 1 %, 0.5 % and
+0.1 % error, with the time ratio. The references are good to about 0.3 % (see
+the reference README), so differences below that mean little and 0.1 % is out
+of reach.
+
+    python benchmarks/vs_moordyn.py [--cases A B] [--duration 20] [--quick]
                                     [--json out.json] [--plot out.png]
 
-The reference histories are looked for in $MOORJAX_REFERENCE_DIR (default
-../shared/reference relative to the repository); without them the error column
-is empty and no cheapest-at-error summary is printed.
+The reference data is looked for in $MOORJAX_REFERENCE_DIR (default
+../shared/reference relative to the repository); without it the error column
+is empty and a built-in list of MoorDyn settings is used.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
+import csv
 import os
 import sys
 
-import jax
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-import moorjax as mj  # noqa: E402
-from benchmarks.moordyn_runner import load_reference, rel_rms_error, run_moordyn  # noqa: E402
-from moorjax.dynamics import timed_simulate  # noqa: E402
+from benchmarks.common import (  # noqa: E402
+    CASES,
+    NOISE_NOTE,
+    base_parser,
+    case_scene,
+    jsonable,
+    print_table,
+    reference_csv,
+    reference_dir,
+    static_init,
+    timed_run,
+    write_json,
+)
+from benchmarks.moordyn_runner import rel_rms_error, run_moordyn  # noqa: E402
 from moorjax.examples import example_path  # noqa: E402
-from moorjax.io import build_scene, read_deck  # noqa: E402
 
-CASES = {
-    # deck, fairlead centre, amplitude (x), period
-    "A": ("oc3_catenary", np.array([-5.2, 0.0, -70.0]), 5.0, 10.0),
-    "B": ("taut_polyester", np.array([0.0, 0.0, -5.0]), 2.0, 8.0),
-}
-MOORDYN_RUNS = {
+TOLS = [(1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)]
+#: error levels of the cheapest-run summary (0.5 %: only N = 80 runs get there; the
+#: references are good to about 0.3 %, so 0.1 % is not reachable with them)
+LEVELS = (0.01, 0.005, 0.001)
+NS = [10, 20, 40, 80]
+#: used when the reference cost table is missing: (N, scheme, dtM [s])
+MOORDYN_FALLBACK = {
     "A": [(10, "rk2", 6.25e-3), (20, "rk2", 3.125e-3), (40, "rk2", 3.125e-3), (40, "rk4", 4.167e-3),
-          (80, "rk2", 7.8e-4)],
-    "B": [(10, "rk2", 1.667e-3), (20, "rk2", 4.0e-4), (40, "rk2", 1.0e-4)],
+          (40, "midpoint5", 1.25e-2), (80, "rk2", 7.9e-4)],
+    "B": [(10, "rk2", 1.667e-3), (20, "rk2", 4.9e-4), (20, "midpoint5", 3.57e-3), (40, "rk2", 1.17e-4)],
 }
-MOORJAX_RUNS = [(10, "kvaerno5", 1e-5), (20, "kvaerno5", 1e-6), (40, "kvaerno5", 1e-7),
-                (20, "kvaerno3", 1e-6)]
-QUICK = {"moordyn": {"A": [(40, "rk2", 3.125e-3)], "B": [(10, "rk2", 1.667e-3)]},
-         "moorjax": [(20, "kvaerno5", 1e-6)]}
+QUICK = {
+    "moordyn": {"A": [(40, "rk2", 3.125e-3), (20, "rk4", 8.333e-3), (40, "midpoint5", 1.25e-2)],
+                "B": [(10, "rk2", 1.667e-3), (20, "midpoint5", 3.571e-3)]},
+    # (N, solver, (rtol, atol) or None, fixed dt or None)
+    "moorjax": {"A": [(40, "kvaerno5", (1e-5, 1e-4), None), (20, "kvaerno3", (1e-5, 1e-4), None),
+                      (20, "heun", None, 6.25e-3), (40, "heun", None, 3.125e-3),
+                      (20, "implicit_euler", None, 2e-3)],
+                "B": [(20, "kvaerno3", (1e-5, 1e-4), None), (20, "kvaerno5", (1e-6, 1e-5), None),
+                      (10, "heun", None, 1.667e-3), (20, "implicit_euler", None, 2e-3)]},
+}
 
 
-def reference_dir():
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    return os.environ.get("MOORJAX_REFERENCE_DIR", os.path.join(here, "..", "shared", "reference"))
-
-
-def run_case(case, duration, quick):
-    name, centre, amp, period = CASES[case]
-    deck_path = example_path(name)
-    ref_csv = os.path.join(reference_dir(), f"ref_{case}.csv")
-    has_ref = os.path.exists(ref_csv)
-    w = 2 * np.pi / period
-
-    def path_fn(t):
-        return centre + np.array([amp * np.sin(w * t), 0.0, 0.0])
-
-    rows = []
-    for n, scheme, dt in (QUICK["moordyn"][case] if quick else MOORDYN_RUNS[case]):
-        r = run_moordyn(deck_path, path_fn, duration, n_segments=n, dt=dt, scheme=scheme)
-        err = rel_rms_error(r["t"], r["tension"], ref_csv) if has_ref and r["status"] == "ok" else None
-        rows.append(dict(case=case, code="MoorDyn", N=n, method=scheme, setting=f"dt={dt:g}",
-                         ms_per_sim_s=r["ms_per_sim_s"], compile_s=0.0, rel_err=err,
-                         status=r["status"]))
-        print(_fmt(rows[-1]), flush=True)
-
-    deck = read_deck(deck_path)
-    for n, solver, tol in (QUICK["moorjax"] if quick else MOORJAX_RUNS):
-        scene = build_scene(deck, segments=n)
-        line = scene.lines[0]
-        import equinox as eqx
-
-        scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene,
-                            mj.SinePath(centre, [amp, 0.0, 0.0], period))
-        del line
-        try:
-            res, c_s, r_s = timed_simulate(scene, duration, solver=solver, rtol=tol, atol=tol)
-            res = jax.device_get(res)
-            status = "ok"
-            err = (rel_rms_error(np.asarray(res.ts), np.asarray(res.tension_b[:, 0]), ref_csv)
-                   if has_ref else None)
-            steps = int(res.num_steps)
-        except RuntimeError as exc:  # a failed run is a result too
-            c_s, r_s, err, status, steps = float("nan"), float("nan"), None, f"failed: {exc}", 0
-        rows.append(dict(case=case, code="moorjax", N=n, method=solver, setting=f"tol={tol:g}",
-                         ms_per_sim_s=1e3 * r_s / duration, compile_s=c_s, rel_err=err,
-                         status=status, steps=steps))
-        print(_fmt(rows[-1]), flush=True)
-    return rows
-
-
-def _fmt(r):
-    err = "   n/a  " if r["rel_err"] is None else f"{100 * r['rel_err']:7.3f}%"
-    return (f"{r['case']:>2} {r['code']:>8} N={r['N']:<4d} {r['method']:>9} {r['setting']:>13} "
-            f"{r['ms_per_sim_s']:10.2f} ms/sim-s  compile {r['compile_s']:6.2f} s  err {err}  "
-            f"{r['status']}")
-
-
-def cheapest(rows, case, level):
+def moordyn_table():
+    """{case: [(N, scheme, dtM)]} from moordyn_cost_error.csv, or None."""
+    path = os.path.join(reference_dir(), "moordyn_cost_error.csv")
+    if not os.path.exists(path):
+        return None
     out = {}
-    for code in ("MoorDyn", "moorjax"):
-        ok = [r for r in rows if r["case"] == case and r["code"] == code
-              and r["rel_err"] is not None and r["rel_err"] <= level]
-        out[code] = min(ok, key=lambda r: r["ms_per_sim_s"]) if ok else None
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            out.setdefault(row["case"], []).append((int(row["N"]), row["scheme"], float(row["dtM"])))
     return out
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--cases", nargs="+", default=["A", "B"], choices=list(CASES))
-    p.add_argument("--duration", type=float, default=60.0)
-    p.add_argument("--quick", action="store_true", help="one run per code and case")
-    p.add_argument("--json", help="write the figures to this path")
-    p.add_argument("--plot", help="write a work-precision plot (PNG)")
-    args = p.parse_args(argv)
+def rk2_limit(table, case, n):
+    """MoorDyn's largest stable RK2 dtM at N segments (from the cost table) [s]."""
+    dts = [dt for (m, s, dt) in (table or {}).get(case, []) if m == n and s == "rk2"]
+    return max(dts) if dts else None
 
+
+def moorjax_plan(case, quick, table):
+    if quick:
+        return QUICK["moorjax"][case]
+    runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5") for tol in TOLS]
+    runs += [(n, "implicit_euler", None, dt) for n in (20, 40) for dt in (1e-3, 2e-3, 5e-3)]
+    for n in NS:
+        lim = rk2_limit(table, case, n)
+        if lim is not None:
+            runs += [(n, "heun", None, lim), (n, "heun", None, lim / 2)]
+    return runs
+
+
+def run_case(case, duration, quick):
+    c = CASES[case]
+    ref_csv = reference_csv(case)
+    table = moordyn_table()
+    md_runs = (QUICK["moordyn"][case] if quick else
+               [r for r in (table or MOORDYN_FALLBACK)[case] if r[0] <= 80])
     rows = []
-    for case in args.cases:
-        rows += run_case(case, args.duration, args.quick)
+    for n, scheme, dt in md_runs:
+        r = run_moordyn(example_path(c.deck), c.path(), duration, n_segments=n, dt=dt, scheme=scheme)
+        ok = r["status"] == "ok"
+        err = rel_rms_error(r["t"], r["tension"], ref_csv) if (ref_csv and ok) else None
+        rows.append(dict(case=case, code="MoorDyn", N=n, method=scheme, setting=f"dtM {1e3 * dt:.4g} ms",
+                         outcome="ok" if ok else "unstable", ms_per_sim_s=r["ms_per_sim_s"],
+                         cpu_ms_per_sim_s=r["cpu_ms_per_sim_s"], compile_s=0.0,
+                         statics_s=r["init_s"], rel_err=err, steps=int(round(duration / dt)),
+                         max_tension_N=float(np.nanmax(r["tension"])) if ok else float("nan")))
+        print(_line(rows[-1]), flush=True)
 
+    inits = {}
+    for n, solver, tol, dt in moorjax_plan(case, quick, table):
+        scene = case_scene(case, n)
+        if n not in inits:
+            inits[n] = static_init(scene)
+        kw = dict(solver=solver, init=inits[n])
+        if tol is not None:
+            kw.update(rtol=tol[0], atol=tol[1])
+            setting = f"tol {tol[0]:.0e}/{tol[1]:.0e}"
+        if dt is not None:
+            kw["dt"] = dt
+            setting = f"dt {1e3 * dt:.4g} ms"
+        r = timed_run(scene, duration, **kw)
+        res = r.pop("result")
+        err = (rel_rms_error(np.asarray(res.ts), np.asarray(res.tension_b[:, 0]), ref_csv)
+               if (ref_csv and r["outcome"] == "ok") else None)
+        cpu = 1e3 * r["cpu_s"] / duration if r["outcome"] == "ok" else float("nan")
+        if r["outcome"] != "ok":
+            r["ms_per_sim_s"] = float("nan")
+        rows.append(dict(case=case, code="moorjax", N=n, method=solver, setting=setting,
+                         rel_err=err, cpu_ms_per_sim_s=cpu, **r))
+        print(_line(rows[-1]), flush=True)
+    return rows
+
+
+def _line(r):
+    err = "   n/a  " if r["rel_err"] is None else f"{100 * r['rel_err']:7.3f}%"
+    return (f"  {r['case']} {r['code']:>8} N={r['N']:<3d} {r['method']:>14} {r['setting']:>18} "
+            f"{r['ms_per_sim_s']:9.2f} ms/sim-s  compile {r['compile_s']:5.1f} s  err {err}  "
+            f"{r['outcome'][:50]}")
+
+
+def cheapest(rows, case, level, key="ms_per_sim_s", by="code"):
+    """Cheapest ok run at error ≤ level, per code (or per ``by`` = "method")."""
+    out = {}
+    for r in rows:
+        if (r["case"] == case and r["outcome"] == "ok" and r["rel_err"] is not None
+                and r["rel_err"] <= level and np.isfinite(r[key])):
+            k = r[by] if by == "code" else (r["code"], r["method"])
+            if k not in out or r[key] < out[k][key]:
+                out[k] = r
+    if by == "code":
+        return {code: out.get(code) for code in ("MoorDyn", "moorjax")}
+    return out
+
+
+def summarise(rows, cases):
     summary = []
-    print("\ncheapest run at a given error (ms per simulated second):")
-    for case in args.cases:
-        for level in (0.01, 0.001):
+    print("\ncheapest run at a given error (wall ms per simulated second; CPU ms in brackets):")
+    for case in cases:
+        for level in LEVELS:
             c = cheapest(rows, case, level)
             md, mj_ = c["MoorDyn"], c["moorjax"]
             ratio = md["ms_per_sim_s"] / mj_["ms_per_sim_s"] if (md and mj_) else None
             summary.append(dict(case=case, level=level,
-                                moordyn=md and md["ms_per_sim_s"], moorjax=mj_ and mj_["ms_per_sim_s"],
-                                speedup=ratio))
-            fmt = lambda r: "none" if r is None else f"{r['ms_per_sim_s']:.2f} (N={r['N']} {r['method']})"  # noqa: E731
-            print(f"  {case} ≤{100 * level:g}%: MoorDyn {fmt(md)}  moorjax {fmt(mj_)}  "
-                  f"speed-up {'n/a' if ratio is None else f'{ratio:.3g}x'}")
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(dict(runs=rows, summary=summary), f, indent=2)
+                                moordyn=md and {k: md[k] for k in ("N", "method", "setting",
+                                                                   "ms_per_sim_s", "rel_err")},
+                                moorjax=mj_ and {k: mj_[k] for k in ("N", "method", "setting",
+                                                                     "ms_per_sim_s", "rel_err")},
+                                moordyn_over_moorjax=ratio))
+
+            def f(r):
+                if r is None:
+                    return "none"
+                return (f"{r['ms_per_sim_s']:.2f} [{r['cpu_ms_per_sim_s']:.2f}] (N={r['N']} {r['method']} "
+                        f"{r['setting']}, {100 * r['rel_err']:.2f} %)")
+
+            verdict = ("n/a" if ratio is None else
+                       f"MoorDyn/moorjax time = {ratio:.3g} "
+                       f"({'moorjax' if ratio > 1 else 'MoorDyn'} faster)")
+            print(f"  {case} ≤ {100 * level:g} %: MoorDyn {f(md)}\n"
+                  f"  {' ' * len(case)}           moorjax {f(mj_)}\n"
+                  f"  {' ' * len(case)}           {verdict}")
+            per = cheapest(rows, case, level, by="method")
+            if per:
+                print(f"  {' ' * len(case)}           per method: " + ", ".join(
+                    f"{code} {m} {r['ms_per_sim_s']:.2f} (N={r['N']})"
+                    for (code, m), r in sorted(per.items(), key=lambda kv: kv[1]["ms_per_sim_s"])))
+    return summary
+
+
+def plot(rows, cases, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(cases), figsize=(6 * len(cases), 4.5), squeeze=False)
+    markers = {"rk2": "o", "rk4": "D", "midpoint5": "v", "kvaerno3": "s", "kvaerno5": "^",
+               "implicit_euler": "P", "heun": "x"}
+    for ax, case in zip(axes[0], cases):
+        for code, colour in (("MoorDyn", "tab:blue"), ("moorjax", "tab:red")):
+            methods = sorted({r["method"] for r in rows if r["case"] == case and r["code"] == code})
+            for m in methods:
+                pts = [(r["rel_err"], r["ms_per_sim_s"], r["N"]) for r in rows
+                       if r["case"] == case and r["code"] == code and r["method"] == m
+                       and r["rel_err"] is not None and np.isfinite(r["ms_per_sim_s"])]
+                if not pts:
+                    continue
+                e, t, n = zip(*pts)
+                ax.loglog(np.array(e) * 100, t, markers.get(m, "."), color=colour, alpha=0.8,
+                          label=f"{code} {m}", mfc="none" if code == "MoorDyn" else colour)
+                for ei, ti, ni in pts:
+                    ax.annotate(str(ni), (ei * 100, ti), fontsize=6, xytext=(2, 2),
+                                textcoords="offset points")
+        for lvl in (1.0, 0.1):
+            ax.axvline(lvl, color="grey", lw=0.5, ls="--")
+        ax.set(title=f"case {case} (numbers: segments)", xlabel="RMS tension error / reference std [%]",
+               ylabel="wall ms per simulated s")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    print(f"wrote {path}")
+
+
+def main(argv=None):
+    p = base_parser(__doc__)
+    p.add_argument("--cases", nargs="+", default=["A", "B"], choices=list(CASES))
+    p.add_argument("--duration", type=float, default=20.0, help="simulated seconds (default 20)")
+    p.add_argument("--plot", metavar="PATH", help="write a work-precision plot (PNG)")
+    args = p.parse_args(argv)
+    print(f"work–precision, {args.duration:g} s simulated" + (" (--quick)" if args.quick else ""))
+    print(NOISE_NOTE)
+    rows = []
+    for case in args.cases:
+        rows += run_case(case, args.duration, args.quick)
+    for case in args.cases:
+        print_table([r for r in rows if r["case"] == case], [
+            ("code", "code", ""), ("N", "N", "d"), ("method", "method", ""),
+            ("setting", "setting", ""), ("outcome", lambda r: r["outcome"][:44], ""),
+            ("ms/sim-s", "ms_per_sim_s", ".2f"), ("cpu ms/sim-s", "cpu_ms_per_sim_s", ".2f"),
+            ("compile [s]", "compile_s", ".1f"),
+            ("err/std", lambda r: None if r["rel_err"] is None else f"{100 * r['rel_err']:.3f}%", ""),
+            ("steps", "steps", "d"),
+        ], title=f"case {case} (error: RMS end-B tension − reference |F|, over its std)")
+    summary = summarise(rows, args.cases)
+    write_json(args.json, dict(runs=jsonable(rows), summary=summary, duration_s=args.duration,
+                               quick=args.quick))
     if args.plot:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, axes = plt.subplots(1, len(args.cases), figsize=(5 * len(args.cases), 4), squeeze=False)
-        for ax, case in zip(axes[0], args.cases):
-            for code, mk in (("MoorDyn", "o"), ("moorjax", "s")):
-                pts = [(r["rel_err"], r["ms_per_sim_s"]) for r in rows
-                       if r["case"] == case and r["code"] == code and r["rel_err"] is not None]
-                if pts:
-                    e, t = zip(*pts)
-                    ax.loglog(e, t, mk, label=code)
-            ax.set(title=f"case {case}", xlabel="RMS error / reference std",
-                   ylabel="wall ms per simulated s")
-            ax.legend()
-        fig.tight_layout()
-        fig.savefig(args.plot, dpi=120)
+        plot(rows, args.cases, args.plot)
     return 0
 
 

@@ -6,6 +6,8 @@
         --out OUT.csv [--stats]
     moorjax ensemble DECK --duration T [--motion MOTION.csv] --vary NAME=v1,v2,...
         [--vary ...] --out DIR [--histories] [--chunk-size K] [simulate options]
+    moorjax fit DECK --motion MOTION.csv --target TARGET.csv --params Cd_normal,Cd_axial[,...]
+        [--line ID] [--steps K] --out FIT.json
     moorjax examples
 
 DECK is a MoorDyn v2 input file or ``example:NAME`` for a bundled deck.
@@ -243,6 +245,10 @@ def build_parser() -> argparse.ArgumentParser:
     en.add_argument("--histories", action="store_true", help="also write each member's tension history")
     en.add_argument("--chunk-size", type=_positive_int, default=100, help="members per compiled batch")
     en.set_defaults(func=cmd_ensemble)
+
+    from .identify.cli import add_parser as add_fit_parser
+
+    add_fit_parser(sub)
 
     e = sub.add_parser("examples", help="list the bundled example decks")
     e.set_defaults(func=cmd_examples)

@@ -227,7 +227,7 @@ def plan(
         t_end = float(np.max(np.abs(np.asarray(ts)))) if not isinstance(ts, jax.core.Tracer) else 1.0
         controller = diffrax.PIDController(
             rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4,
-            dtmin=_DT_MIN * max(1.0, t_end), force_dtmin=False,
+            dtmin=jnp.asarray(_DT_MIN * max(1.0, t_end)), force_dtmin=False,
         )
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
 
