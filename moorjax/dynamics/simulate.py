@@ -329,11 +329,11 @@ def simulate(
         )
     name = p.name
     if throw and not isinstance(res.num_steps, jax.core.Tracer):
-        _raise_on_failure(res, name, max_steps)
+        _raise_on_failure(res, name, max_steps, fixed=dt is not None)
     return res
 
 
-def _raise_on_failure(res, name, max_steps):
+def _raise_on_failure(res, name, max_steps, fixed=False):
     ok = bool(res.succeeded())
     tension = np.asarray(res.tension_b)
     t_bad = _first_bad_time(np.asarray(res.ts), tension)
@@ -347,6 +347,11 @@ def _raise_on_failure(res, name, max_steps):
             "the step size fell below its minimum (the state became non-finite, or a "
             "snap load or slack line the method cannot resolve: check the inputs, try "
             "tighter tolerances or more segments)"
+        )
+    elif (code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular) and fixed:
+        cause = (
+            "Newton did not converge at the fixed step dt (a snap load or slack line "
+            "within one step?): use adaptive steps (no dt) or a smaller dt"
         )
     elif code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular:
         cause = "Newton did not converge even at the smallest step (stiff snap or slack line?)"
