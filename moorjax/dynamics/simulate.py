@@ -348,12 +348,16 @@ def _raise_on_failure(res, name, max_steps, fixed=False):
             "snap load or slack line the method cannot resolve: check the inputs, try "
             "tighter tolerances or more segments)"
         )
-    elif (code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular) and fixed:
+    elif fixed and code != diffrax.RESULTS.successful:
         cause = (
             "Newton did not converge at the fixed step dt (a snap load or slack line "
             "within one step?): use adaptive steps (no dt) or a smaller dt"
         )
-    elif code == diffrax.RESULTS.nonlinear_divergence or code == diffrax.RESULTS.singular:
+    elif code in (
+        diffrax.RESULTS.nonlinear_divergence,
+        diffrax.RESULTS.singular,
+        diffrax.RESULTS.nonlinear_max_steps_reached,
+    ):
         cause = "Newton did not converge even at the smallest step (stiff snap or slack line?)"
     else:
         cause = (
