@@ -8,6 +8,14 @@ built without drag) cannot be varied: the error says so.
 
 Note: MoorDyn's ``BA < 0`` (a damping *ratio*) is converted to a coefficient
 when the deck is read; varying ``EA`` does not recompute it.
+
+Besides MoorDyn's column names there are aliases in the words of the
+identification API (``Cd_normal`` = ``Cd``, ``Cd_axial`` = ``CdAx``,
+``Ca_normal`` = ``Ca``, ``Ca_axial`` = ``CaAx``), the constants of the
+load-dependent polyester laws (``alpha``, ``beta``, ``MBL``), end positions
+(``xA`` … ``zB`` [m]: a fixed end's point or a sine path's centre) and the
+components of a uniform current (``current_x`` … [m/s]). Components of a vector
+are *signed* (any finite value).
 """
 
 from __future__ import annotations
@@ -20,7 +28,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .axial import LinearEA
+from .axial import Bilateral, LinearEA, PolyesterMBL, PolyesterWu
+from .ends import FixedEnd, SinePath
+from .environment import UniformCurrent
 
 
 @dataclass(frozen=True)
@@ -30,6 +40,8 @@ class Parameter:
     where: Callable  # line -> leaf, or env -> leaf
     scope: str  # "line" or "env"
     positive: bool  # > 0 required (else >= 0)
+    index: int | None = None  # component of a vector leaf (where(...) is the vector)
+    signed: bool = False  # any finite value (overrides ``positive``)
 
 
 def _need(obj, what, line_label):
@@ -45,6 +57,46 @@ def _ea(line):
             f"line {line.label}: EA can only be varied for a linear EA law, not {type(axial).__name__}"
         )
     return axial.ea
+
+
+def _polyester(line, what):
+    axial = line.line_type.axial
+    if isinstance(axial, Bilateral):
+        axial = axial.law
+    if not isinstance(axial, (PolyesterWu, PolyesterMBL)):
+        raise ValueError(
+            f"line {line.label}: {what} belongs to a load-dependent polyester law "
+            f"(PolyesterWu or PolyesterMBL), not {type(axial).__name__}"
+        )
+    return axial
+
+
+def _mbl(line):
+    axial = _polyester(line, "MBL")
+    return axial.mbl if isinstance(axial, PolyesterMBL) else axial.breaking_strength
+
+
+def _end_point(line, end):
+    e = line.end_a if end == "A" else line.end_b
+    if isinstance(e, FixedEnd):
+        return e.point
+    if isinstance(e, SinePath):
+        return e.center
+    raise ValueError(
+        f"line {line.label}: end {end} is a {type(e).__name__} (a prescribed motion "
+        "read from a table); only a fixed end's point or a sine path's centre can be varied"
+    )
+
+
+def _uniform_current(env):
+    cur = env.current
+    if not isinstance(cur, UniformCurrent):
+        what = "no current" if cur is None else f"a {type(cur).__name__}"
+        raise ValueError(
+            f"the scene has {what}; current_x/_y/_z vary a UniformCurrent (build the "
+            "environment with current=UniformCurrent([ux, uy, uz]) to vary it)"
+        )
+    return cur.u
 
 
 PARAMETERS: dict[str, Parameter] = {
@@ -70,7 +122,30 @@ PARAMETERS: dict[str, Parameter] = {
                       lambda env: _need(env.seabed, "seabed", "-").stiffness, "env", False),
     "cBot": Parameter("seabed damping", "Pa·s/m",
                       lambda env: _need(env.seabed, "seabed", "-").damping, "env", False),
+    # load-dependent polyester laws: EA(T) = MBL·(alpha + beta·T/MBL) (PolyesterMBL)
+    # or RHOL·(alpha + beta·T/Bs)·1e6 (PolyesterWu, whose Bs is named MBL here)
+    "alpha": Parameter("polyester stiffness constant alpha", "-",
+                       lambda ln: _polyester(ln, "alpha").alpha, "line", True),
+    "beta": Parameter("polyester load-dependence constant beta", "-",
+                      lambda ln: _polyester(ln, "beta").beta, "line", False),
+    "MBL": Parameter("minimum breaking load of a polyester law", "N", _mbl, "line", True),
 }
+# aliases (same leaves) in the words of the identification API
+PARAMETERS["Cd_normal"] = PARAMETERS["Cd"]
+PARAMETERS["Cd_axial"] = PARAMETERS["CdAx"]
+PARAMETERS["Ca_normal"] = PARAMETERS["Ca"]
+PARAMETERS["Ca_axial"] = PARAMETERS["CaAx"]
+for _end in ("A", "B"):
+    for _i, _c in enumerate("xyz"):
+        PARAMETERS[f"{_c}{_end}"] = Parameter(
+            f"{_c} of end {_end} (fixed point or sine-path centre)", "m",
+            lambda ln, _end=_end: _end_point(ln, _end), "line", False, index=_i, signed=True,
+        )
+for _i, _c in enumerate("xyz"):
+    PARAMETERS[f"current_{_c}"] = Parameter(
+        f"{_c} component of a uniform current", "m/s", _uniform_current, "env", False,
+        index=_i, signed=True,
+    )
 
 
 def valid_names() -> str:
@@ -108,10 +183,12 @@ def get_parameter(scene, name: str):
     label, base = _split(name)
     p = PARAMETERS[base]
     if p.scope == "env":
-        return p.where(scene.env)
+        leaf = p.where(scene.env)
+        return leaf if p.index is None else leaf[p.index]
     for line in scene.lines:
         if label is None or line.label == label:
-            return p.where(line)
+            leaf = p.where(line)
+            return leaf if p.index is None else leaf[p.index]
 
 
 def set_parameter(scene, name: str, value):
@@ -124,17 +201,22 @@ def set_parameter(scene, name: str, value):
     p = PARAMETERS[base]
     if not isinstance(value, jax.core.Tracer):
         v = float(value)
-        ok = np.isfinite(v) and (v > 0 if p.positive else v >= 0)
+        ok = np.isfinite(v) and (p.signed or (v > 0 if p.positive else v >= 0))
         if not ok:
-            rel = "> 0" if p.positive else ">= 0"
-            raise ValueError(f"{name} = {v} {p.unit} must be finite and {rel}")
+            rel = "" if p.signed else (" and > 0" if p.positive else " and >= 0")
+            raise ValueError(f"{name} = {v} {p.unit} must be finite{rel}")
+    value = jnp.asarray(value, dtype=float)
+
+    def new_leaf(old):
+        return value if p.index is None else old.at[p.index].set(value)
+
     if p.scope == "env":
-        p.where(scene.env)  # raises if the term is absent
-        return eqx.tree_at(lambda s: p.where(s.env), scene, jnp.asarray(value, dtype=float))
+        old = p.where(scene.env)  # raises if the term is absent
+        return eqx.tree_at(lambda s: p.where(s.env), scene, new_leaf(old))
     for i, line in enumerate(scene.lines):
         if label is None or line.label == label:
-            p.where(line)
-            scene = eqx.tree_at(lambda s, i=i: p.where(s.lines[i]), scene, jnp.asarray(value, dtype=float))
+            old = p.where(line)
+            scene = eqx.tree_at(lambda s, i=i: p.where(s.lines[i]), scene, new_leaf(old))
     return scene
 
 

@@ -1,0 +1,253 @@
+"""Cost of a gradient of a tension-history loss, relative to one forward simulation.
+
+For the reference catenary (case A: ``oc3_catenary``, fairlead x = −5.2 +
+5·sin(2πt/10) m) with N = 20 and 80 segments, 60 s simulated with fixed steps
+(kvaerno3, dt = 0.01 s, Newton tolerances 1e-6, outputs every 0.05 s):
+
+- ``forward``: static equilibrium + integration + the misfit to a target history
+  (one compiled function);
+- ``gradient``: the same misfit *and* its gradient with respect to every array of
+  the scene (reverse mode: ``moorjax.identify.misfit_and_gradient``), with the
+  adjoint moorjax uses (every step's state checkpointed, no recomputation) and
+  with diffrax's default binomial schedule (O(√steps) checkpoints, which
+  recomputes steps);
+- ``jvp``: one forward-mode directional derivative (``diffrax.ForwardMode``, as
+  used for the Gauss–Newton covariance);
+- ``dense IFT``: the gradient with diffrax's default implicit-function solve in
+  every implicit stage (a dense LU; moorjax.identify replaces it by the Newton's
+  block-tridiagonal solve, see ``moorjax/identify/response.py``), for N ≤
+  ``--dense-up-to``.
+
+Each function is compiled first (``compile_s``), then run ``--repeats`` times
+(min wall time reported, ``run_s``). Memory: the XLA buffers of the compiled
+function (``temp``: scratch, ``total``: arguments + outputs + scratch), from
+``compiled.memory_analysis()``.
+
+    python benchmarks/gradients.py [--quick] [--segments 20 80] [--duration 60] [--json out.json]
+    python benchmarks/gradients.py --case-a-fit [--fit-segments 20]
+
+``--case-a-fit`` is the real-data check of the identification: ``moorjax fit`` of
+case A's Cd_normal to the converged MoorDyn history (``ref_A.csv``: |F| on the
+fairlead, as ``L1_tension_b``), started from half the deck's value (1.6), over
+the 60 s of ``motion_A.csv``. The reference data are looked for in
+``$MOORJAX_REFERENCE_DIR`` (default ``../shared/reference``).
+
+Target: gradient/forward ≤ 5. Timings come from a 2-core machine shared with
+other work (±30 %); compare the ratios within one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import moorjax as mj  # noqa: E402
+from moorjax.examples import example_path  # noqa: E402
+from moorjax.identify import experiment, simulation  # noqa: E402
+from moorjax.identify import response as response_mod  # noqa: E402
+from moorjax.identify.response import structured_implicit_gradients  # noqa: E402
+from moorjax.identify.objective import _misfit, model_tensions, tangent  # noqa: E402
+from moorjax.io import build_scene, read_deck  # noqa: E402
+
+
+def case_a(n):
+    scene = build_scene(read_deck(example_path("oc3_catenary")), segments=n)
+    path = mj.SinePath([-5.2, 0.0, -70.0], [5.0, 0.0, 0.0], 10.0)
+    return eqx.tree_at(lambda s: s.lines[0].end_b, scene, path)
+
+
+def _forward(exp, sim):
+    return _misfit(exp.scene, exp.data, exp.sqrt_weight, exp.channels, sim)[0]
+
+
+def _gradient(exp, sim):
+    diff, static = eqx.partition(exp.scene, eqx.is_inexact_array)
+    return jax.value_and_grad(
+        lambda d: _misfit(eqx.combine(d, static), exp.data, exp.sqrt_weight, exp.channels, sim)[0]
+    )(diff)
+
+
+def _jvp(exp, sim, tang):
+    diff, static = eqx.partition(exp.scene, eqx.is_inexact_array)
+    f = lambda d: model_tensions(eqx.combine(d, static), exp, sim)[0]  # noqa: E731
+    return jax.jvp(f, (diff,), (tang,))
+
+
+def measure(fn, args, repeats, structured=True):
+    """(compile s, min run s, memory dict, output) of jax.jit(fn).
+
+    ``structured``: trace under ``structured_implicit_gradients`` (as every
+    compiled function of moorjax.identify is); False: diffrax's default dense LU
+    in the implicit-function derivative of each implicit stage.
+    """
+    dynamic, static = eqx.partition(args, eqx.is_array)
+
+    def call(d):
+        return fn(*eqx.combine(d, static))
+
+    t0 = time.perf_counter()
+    with structured_implicit_gradients(structured):
+        compiled = jax.jit(call).lower(dynamic).compile()
+    t_compile = time.perf_counter() - t0
+    runs, out = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = jax.block_until_ready(compiled(dynamic))
+        runs.append(time.perf_counter() - t0)
+    mem = {}
+    try:
+        ma = compiled.memory_analysis()
+        mem = dict(temp_MB=ma.temp_size_in_bytes / 2**20,
+                   total_MB=(ma.temp_size_in_bytes + ma.argument_size_in_bytes
+                             + ma.output_size_in_bytes) / 2**20)
+    except Exception:  # noqa: BLE001 - not every backend reports it
+        pass
+    return t_compile, min(runs), mem, out
+
+
+def run_case(n, duration, dt, repeats, with_binomial, with_dense):
+    scene = case_a(n)
+    ts = np.arange(1, int(round(duration / 0.05)) + 1) * 0.05
+    sim = simulation(ts, dt=dt)
+    truth = np.asarray(response_mod.tension_histories(scene, sim).tension_b)
+    # target: the same line with 20 % more normal drag, so the misfit is not zero
+    target_scene = eqx.tree_at(lambda s: s.lines[0].line_type.drag.cd_normal, scene,
+                               scene.lines[0].line_type.drag.cd_normal * 1.2)
+    data = np.asarray(response_mod.tension_histories(target_scene, sim).tension_b)
+    exp = experiment(scene, ts, data, name=f"A N={n}")
+    row = dict(N=n, duration_s=duration, dt_s=dt, steps=int(round(duration / dt)),
+               max_tension_N=float(np.max(truth)))
+    t_c, t_r, mem, v = measure(_forward, (exp, sim), repeats)
+    row.update(forward_compile_s=t_c, forward_s=t_r, forward_mem=mem, loss=float(v))
+    t_c, t_r, mem, (v, g) = measure(_gradient, (exp, sim), repeats)
+    gcd = float(g.lines[0].line_type.drag.cd_normal)
+    finite = all(bool(np.all(np.isfinite(x))) for x in jax.tree_util.tree_leaves(g))
+    row.update(gradient_compile_s=t_c, gradient_s=t_r, gradient_mem=mem,
+               ratio=t_r / row["forward_s"], dloss_dCd=gcd, gradient_finite=finite)
+    if with_binomial:
+        old = response_mod.CHECKPOINT_BYTES
+        response_mod.CHECKPOINT_BYTES = 0  # force diffrax's default O(√steps) schedule
+        try:
+            t_c, t_r, mem, _ = measure(_gradient, (exp, sim), repeats)
+        finally:
+            response_mod.CHECKPOINT_BYTES = old
+        row.update(binomial_s=t_r, binomial_ratio=t_r / row["forward_s"], binomial_mem=mem)
+    if with_dense:
+        t_c, t_r, mem, _ = measure(_gradient, (exp, sim), 1, structured=False)
+        row.update(dense_ift_s=t_r, dense_ift_ratio=t_r / row["forward_s"], dense_ift_mem=mem)
+    tang = tangent(scene, "Cd_normal")
+    t_c, t_r, mem, _ = measure(_jvp, (exp, sim.with_adjoint("forward"), tang), repeats)
+    row.update(jvp_s=t_r, jvp_ratio=t_r / row["forward_s"], jvp_mem=mem)
+    return row
+
+
+def reference_dir():
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return os.environ.get("MOORJAX_REFERENCE_DIR", os.path.join(here, "..", "shared", "reference"))
+
+
+def case_a_fit(segments, steps=30):
+    """Fit Cd_normal of case A to MoorDyn's N=160 history through the ``moorjax fit`` CLI."""
+    import tempfile
+
+    from moorjax.identify.cli import add_parser
+
+    ref = reference_dir()
+    paths = {k: os.path.join(ref, f) for k, f in
+             (("deck", "case_A.dat"), ("motion", "motion_A.csv"), ("ref", "ref_A.csv"))}
+    missing = [p for p in paths.values() if not os.path.exists(p)]
+    if missing:
+        print(f"case A check skipped: missing {', '.join(missing)}")
+        return None
+    data = np.loadtxt(paths["ref"], delimiter=",", skiprows=1)
+    with tempfile.TemporaryDirectory() as tmp:
+        target = os.path.join(tmp, "target_A.csv")
+        np.savetxt(target, np.column_stack([data[:, 0], np.linalg.norm(data[:, 3:6], axis=1)]),
+                   delimiter=",", header="t,L1_tension_b", comments="", fmt="%.6f")
+        out = os.path.join(tmp, "fit_A.json")
+        parser = argparse.ArgumentParser(prog="moorjax")
+        add_parser(parser.add_subparsers(dest="command"))
+        args = parser.parse_args([
+            "fit", paths["deck"], "--motion", paths["motion"], "--target", target,
+            "--params", "Cd_normal", "--start", "Cd_normal=0.8", "--segments", str(segments),
+            "--steps", str(steps), "--out", out,
+        ])
+        t0 = time.perf_counter()
+        args.func(args)
+        wall = time.perf_counter() - t0
+        with open(out) as f:
+            res = json.load(f)
+    p = res["params"]["Cd_normal"]
+    deck_cd = 1.6
+    print(f"case A, N={segments}: Cd_normal {p['initial']:.4g} -> {p['fitted']:.4f} "
+          f"(deck {deck_cd}: {100 * (p['fitted'] / deck_cd - 1):+.2f} %, GN std {p['std']:.2g}); "
+          f"loss {res['initial_loss']:.4g} -> {res['final_loss']:.4g}, {res['iterations']} steps, "
+          f"{res['evaluations']} evaluations, {wall:.0f} s ({res['status']})")
+    return dict(segments=segments, fitted=p["fitted"], initial=p["initial"], std=p["std"],
+                rel_to_deck=p["fitted"] / deck_cd - 1, final_loss=res["final_loss"],
+                initial_loss=res["initial_loss"], iterations=res["iterations"], wall_s=wall)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--segments", type=int, nargs="+", default=[20, 80])
+    p.add_argument("--duration", type=float, default=60.0, help="simulated time [s]")
+    p.add_argument("--dt", type=float, default=0.01, help="fixed step [s]")
+    p.add_argument("--repeats", type=int, default=2)
+    p.add_argument("--quick", action="store_true", help="N = 20 only, 20 s")
+    p.add_argument("--no-binomial", action="store_true", help="skip the binomial-checkpoint variant")
+    p.add_argument("--dense-up-to", type=int, default=20,
+                   help="also time diffrax's default dense implicit-function solve for N <= this "
+                        "(200x a forward run at N = 80)")
+    p.add_argument("--json", metavar="PATH", help="write the figures to this JSON file")
+    p.add_argument("--case-a-fit", action="store_true",
+                   help="only the real-data check: fit case A's Cd_normal to MoorDyn's history")
+    p.add_argument("--fit-segments", type=int, default=20, help="segments of the case A fit")
+    a = p.parse_args(argv)
+    if a.case_a_fit:
+        row = case_a_fit(a.fit_segments)
+        if a.json and row is not None:
+            with open(a.json, "w") as f:
+                json.dump(row, f, indent=2)
+        return 0
+    if a.quick:
+        a.segments, a.duration = [20], 20.0
+    rows = []
+    for n in a.segments:
+        row = run_case(n, a.duration, a.dt, a.repeats, not a.no_binomial, n <= a.dense_up_to)
+        rows.append(row)
+        mem = lambda d: f"{d.get('temp_MB', float('nan')):.1f}"  # noqa: E731
+        print(
+            f"N={n:3d} {a.duration:g} s ({row['steps']} steps): forward {row['forward_s']:.2f} s "
+            f"[compile {row['forward_compile_s']:.0f} s, temp {mem(row['forward_mem'])} MB] | "
+            f"gradient {row['gradient_s']:.2f} s = {row['ratio']:.2f}x forward "
+            f"[compile {row['gradient_compile_s']:.0f} s, temp {mem(row['gradient_mem'])} MB]"
+            + (f" | binomial checkpoints {row['binomial_ratio']:.2f}x [temp {mem(row['binomial_mem'])} MB]"
+               if "binomial_s" in row else "")
+            + (f" | dense IFT (diffrax default) {row['dense_ift_ratio']:.1f}x" if "dense_ift_s" in row else "")
+            + f" | jvp {row['jvp_ratio']:.2f}x [temp {mem(row['jvp_mem'])} MB]",
+            flush=True,
+        )
+    print("target: gradient <= 5x forward; timings: 2-core machine shared with other work (±30 %)")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(dict(rows=rows, cpus=os.cpu_count(), jax=jax.__version__,
+                           diffrax=diffrax.__version__, date=time.strftime("%Y-%m-%d %H:%M")),
+                      f, indent=2, default=str)
+        print(f"wrote {a.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
