@@ -84,36 +84,40 @@ def _jvp(exp, sim, tang):
     return jax.jvp(f, (diff,), (tang,))
 
 
-def measure(fn, args, repeats, structured=True):
-    """(compile s, min run s, memory dict, output) of jax.jit(fn).
+class Variant:
+    """A compiled function, its compile time, memory and run times."""
 
-    ``structured``: trace under ``structured_implicit_gradients`` (as every
-    compiled function of moorjax.identify is); False: diffrax's default dense LU
-    in the implicit-function derivative of each implicit stage.
-    """
-    dynamic, static = eqx.partition(args, eqx.is_array)
+    def __init__(self, fn, args, structured=True):
+        dynamic, static = eqx.partition(args, eqx.is_array)
+        self.dynamic = dynamic
 
-    def call(d):
-        return fn(*eqx.combine(d, static))
+        def call(d):
+            return fn(*eqx.combine(d, static))
 
-    t0 = time.perf_counter()
-    with structured_implicit_gradients(structured):
-        compiled = jax.jit(call).lower(dynamic).compile()
-    t_compile = time.perf_counter() - t0
-    runs, out = [], None
-    for _ in range(repeats):
         t0 = time.perf_counter()
-        out = jax.block_until_ready(compiled(dynamic))
-        runs.append(time.perf_counter() - t0)
-    mem = {}
-    try:
-        ma = compiled.memory_analysis()
-        mem = dict(temp_MB=ma.temp_size_in_bytes / 2**20,
-                   total_MB=(ma.temp_size_in_bytes + ma.argument_size_in_bytes
-                             + ma.output_size_in_bytes) / 2**20)
-    except Exception:  # noqa: BLE001 - not every backend reports it
-        pass
-    return t_compile, min(runs), mem, out
+        # structured: traced as every compiled function of moorjax.identify is;
+        # False: diffrax's default dense LU in each implicit stage's derivative
+        with structured_implicit_gradients(structured):
+            self.compiled = jax.jit(call).lower(dynamic).compile()
+        self.compile_s = time.perf_counter() - t0
+        self.runs, self.out = [], None
+        self.mem = {}
+        try:
+            ma = self.compiled.memory_analysis()
+            self.mem = dict(temp_MB=ma.temp_size_in_bytes / 2**20,
+                            total_MB=(ma.temp_size_in_bytes + ma.argument_size_in_bytes
+                                      + ma.output_size_in_bytes) / 2**20)
+        except Exception:  # noqa: BLE001 - not every backend reports it
+            pass
+
+    def run(self):
+        t0 = time.perf_counter()
+        self.out = jax.block_until_ready(self.compiled(self.dynamic))
+        self.runs.append(time.perf_counter() - t0)
+
+    @property
+    def best(self):
+        return min(self.runs)
 
 
 def run_case(n, duration, dt, repeats, with_binomial, with_dense):
@@ -128,27 +132,33 @@ def run_case(n, duration, dt, repeats, with_binomial, with_dense):
     exp = experiment(scene, ts, data, name=f"A N={n}")
     row = dict(N=n, duration_s=duration, dt_s=dt, steps=int(round(duration / dt)),
                max_tension_N=float(np.max(truth)))
-    t_c, t_r, mem, v = measure(_forward, (exp, sim), repeats)
-    row.update(forward_compile_s=t_c, forward_s=t_r, forward_mem=mem, loss=float(v))
-    t_c, t_r, mem, (v, g) = measure(_gradient, (exp, sim), repeats)
-    gcd = float(g.lines[0].line_type.drag.cd_normal)
-    finite = all(bool(np.all(np.isfinite(x))) for x in jax.tree_util.tree_leaves(g))
-    row.update(gradient_compile_s=t_c, gradient_s=t_r, gradient_mem=mem,
-               ratio=t_r / row["forward_s"], dloss_dCd=gcd, gradient_finite=finite)
+    variants = {"forward": Variant(_forward, (exp, sim)),
+                "gradient": Variant(_gradient, (exp, sim))}
     if with_binomial:
         old = response_mod.CHECKPOINT_BYTES
         response_mod.CHECKPOINT_BYTES = 0  # force diffrax's default O(√steps) schedule
         try:
-            t_c, t_r, mem, _ = measure(_gradient, (exp, sim), repeats)
+            variants["binomial"] = Variant(_gradient, (exp, sim))
         finally:
             response_mod.CHECKPOINT_BYTES = old
-        row.update(binomial_s=t_r, binomial_ratio=t_r / row["forward_s"], binomial_mem=mem)
+    variants["jvp"] = Variant(_jvp, (exp, sim.with_adjoint("forward"), tangent(scene, "Cd_normal")))
     if with_dense:
-        t_c, t_r, mem, _ = measure(_gradient, (exp, sim), 1, structured=False)
-        row.update(dense_ift_s=t_r, dense_ift_ratio=t_r / row["forward_s"], dense_ift_mem=mem)
-    tang = tangent(scene, "Cd_normal")
-    t_c, t_r, mem, _ = measure(_jvp, (exp, sim.with_adjoint("forward"), tang), repeats)
-    row.update(jvp_s=t_r, jvp_ratio=t_r / row["forward_s"], jvp_mem=mem)
+        variants["dense_ift"] = Variant(_gradient, (exp, sim), structured=False)
+    # interleaved repeats: load changes on a shared machine hit every variant alike
+    for k in range(repeats):
+        for name, v in variants.items():
+            if name != "dense_ift" or k == 0:
+                v.run()
+    fwd = variants["forward"].best
+    row.update(forward_s=fwd, loss=float(variants["forward"].out))
+    v, g = variants["gradient"].out
+    row.update(dloss_dCd=float(g.lines[0].line_type.drag.cd_normal),
+               gradient_finite=all(bool(np.all(np.isfinite(x))) for x in jax.tree_util.tree_leaves(g)))
+    for name, var in variants.items():
+        row[f"{name}_compile_s"] = var.compile_s
+        row[f"{name}_s"] = var.best
+        row[f"{name}_mem"] = var.mem
+        row[f"{name}_ratio"] = var.best / fwd
     return row
 
 
@@ -204,7 +214,7 @@ def main(argv=None):
     p.add_argument("--segments", type=int, nargs="+", default=[20, 80])
     p.add_argument("--duration", type=float, default=60.0, help="simulated time [s]")
     p.add_argument("--dt", type=float, default=0.01, help="fixed step [s]")
-    p.add_argument("--repeats", type=int, default=2)
+    p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--quick", action="store_true", help="N = 20 only, 20 s")
     p.add_argument("--no-binomial", action="store_true", help="skip the binomial-checkpoint variant")
     p.add_argument("--dense-up-to", type=int, default=20,
@@ -227,18 +237,16 @@ def main(argv=None):
     for n in a.segments:
         row = run_case(n, a.duration, a.dt, a.repeats, not a.no_binomial, n <= a.dense_up_to)
         rows.append(row)
-        mem = lambda d: f"{d.get('temp_MB', float('nan')):.1f}"  # noqa: E731
-        print(
-            f"N={n:3d} {a.duration:g} s ({row['steps']} steps): forward {row['forward_s']:.2f} s "
-            f"[compile {row['forward_compile_s']:.0f} s, temp {mem(row['forward_mem'])} MB] | "
-            f"gradient {row['gradient_s']:.2f} s = {row['ratio']:.2f}x forward "
-            f"[compile {row['gradient_compile_s']:.0f} s, temp {mem(row['gradient_mem'])} MB]"
-            + (f" | binomial checkpoints {row['binomial_ratio']:.2f}x [temp {mem(row['binomial_mem'])} MB]"
-               if "binomial_s" in row else "")
-            + (f" | dense IFT (diffrax default) {row['dense_ift_ratio']:.1f}x" if "dense_ift_s" in row else "")
-            + f" | jvp {row['jvp_ratio']:.2f}x [temp {mem(row['jvp_mem'])} MB]",
-            flush=True,
-        )
+        mem = lambda k: f"{row[k + '_mem'].get('temp_MB', float('nan')):.1f} MB"  # noqa: E731
+        parts = [f"forward {row['forward_s']:.2f} s [compile {row['forward_compile_s']:.0f} s, "
+                 f"temp {mem('forward')}]"]
+        labels = dict(gradient="gradient", binomial="gradient, binomial checkpoints",
+                      jvp="jvp (1 direction)", dense_ift="gradient, dense IFT (diffrax default)")
+        for k, label in labels.items():
+            if f"{k}_s" in row:
+                parts.append(f"{label} {row[k + '_s']:.2f} s = {row[k + '_ratio']:.2f}x "
+                             f"[temp {mem(k)}]")
+        print(f"N={n:3d} {a.duration:g} s ({row['steps']} steps): " + " | ".join(parts), flush=True)
     print("target: gradient <= 5x forward; timings: 2-core machine shared with other work (±30 %)")
     if a.json:
         with open(a.json, "w") as f:

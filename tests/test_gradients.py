@@ -218,3 +218,27 @@ def test_parameter_aliases_set_the_moordyn_leaves(name):
     alias_of = {"Cd_normal": "Cd", "Cd_axial": "CdAx", "Ca_normal": "Ca", "Ca_axial": "CaAx"}[name]
     moved = set_parameter(scene, name, 0.77)
     assert float(get_parameter(moved, alias_of)) == pytest.approx(0.77)
+
+
+def test_reduced_transposed_stage_solve_matches_dense():
+    """The implicit-function derivative of a stage solves Aᵀx = b with A = I − c·J;
+    the reduced 3×3 transposed solve equals a dense solve."""
+    import lineax as lx
+
+    from moorjax.dynamics.vector_field import pack, vector_field
+    from moorjax.linalg.banded_solver import SecondOrderBandSolver
+    from moorjax.statics import solve_line_statics
+
+    scene = polyester_scene(current=(0.3, 0.1, 0.0), n=10)
+    line = scene.lines[0]
+    y = pack([solve_line_statics(line, scene.env).state()])[0].at[:, 3:].set(0.3)
+    op = lx.JacobianLinearOperator(lambda q, a: q - 0.01 * vector_field(0.7, (q,), scene)[0], y)
+    dense = np.asarray(op.as_matrix())
+    solver = SecondOrderBandSolver()
+    state = solver.init(op, {})
+    b = jnp.asarray(np.random.default_rng(3).normal(size=y.shape))
+    x = np.asarray(solver.compute(state, b, {})[0]).ravel()
+    np.testing.assert_allclose(dense @ x, np.ravel(b), atol=1e-9)
+    state_t, _ = solver.transpose(state, {})
+    xt = np.asarray(solver.compute(state_t, b, {})[0]).ravel()
+    np.testing.assert_allclose(dense.T @ xt, np.ravel(b), atol=1e-9)

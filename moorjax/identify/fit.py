@@ -16,8 +16,9 @@ The optimiser works on the unconstrained variables u of
 taken (a safeguarded, monotone iteration): the step is halved until the loss is
 finite and decreases sufficiently (Armijo, c = 1e-4); a step that cannot be made
 good in ``max_backtracks`` halvings stops the fit at its last good values with
-``status = "nonfinite"`` or ``"no_decrease"`` and a message naming the experiment
-that failed — it never returns NaN. The default optimiser is optax's L-BFGS
+``status = "nonfinite"`` (a message naming the experiment that failed) or
+``"stalled"`` (no decrease: a loss that is not smooth at that scale)
+— it never returns NaN. The default optimiser is optax's L-BFGS
 without its internal line search (the safeguard above is its line search, run on
 the already compiled misfit, so no second compilation of the simulation is
 needed); any optax ``GradientTransformation`` can be given (e.g.
@@ -59,7 +60,7 @@ class FitResult:
             ``None`` if not computed.
         std: standard deviations {name: σ} from ``covariance``.
         experiment_losses: each experiment's misfit at the end.
-        status: ``"converged"``, ``"max_steps"``, ``"nonfinite"``, ``"no_decrease"``.
+        status: ``"converged"``, ``"max_steps"``, ``"nonfinite"``, ``"stalled"``.
         message: what stopped the fit, in words.
     """
 
@@ -204,7 +205,7 @@ def fit(
     gtol: float = 1e-10,
     ftol: float = 1e-10,
     xtol: float = 1e-8,
-    max_backtracks: int = 12,
+    max_backtracks: int = 8,
     covariance: bool = True,
     noise=None,
     callback=None,
@@ -322,10 +323,13 @@ def fit(
                            f"would lower the loss by {-slope:.2g} (< {_FLOOR:g} of it) and "
                            "no fraction of it lowers the computed loss")
             else:
-                status = "no_decrease"
+                status = "stalled"
                 message = (f"no fraction of the step proposed at iteration {it + 1} lowers the "
-                           f"loss (predicted decrease {-slope:.3g}); the fit stopped at its "
-                           "last good values")
+                           f"loss (predicted decrease {-slope:.3g}, {-slope / ev.loss:.2g} of it): "
+                           "the loss is not smooth at this scale (e.g. seabed contact switching "
+                           "on and off, steps retried after a failed Newton solve); the values "
+                           "are the last, best ones"
+                           )
                 warnings.warn(message, RuntimeWarning, stacklevel=2)
             break
         du = alpha * d

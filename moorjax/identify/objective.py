@@ -92,9 +92,8 @@ def tensions_and_jacobian(exp: Experiment, sim: Simulation, tangents):
 
 def tangent(scene, name: str):
     """Scene-shaped pytree of the inexact arrays: 1 where parameter ``name`` is set, else 0."""
-    diff, _ = eqx.partition(scene, eqx.is_inexact_array)
+    diff, static = eqx.partition(scene, eqx.is_inexact_array)
     zero = jax.tree_util.tree_map(jnp.zeros_like, diff)
-    static = eqx.partition(scene, eqx.is_inexact_array)[1]
     marked = set_parameter(eqx.combine(zero, static), name, 1.0)
     return eqx.partition(marked, eqx.is_inexact_array)[0]
 

@@ -156,7 +156,8 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
     builds them). Couplings of position rows to neighbouring nodes, if any, are
     ignored, which turns the Newton step into a chord step; the nonlinear solver's
     convergence test still guards the result. The transpose (needed by reverse-mode
-    adjoints) falls back to the general 6×6 block solve.
+    adjoints: the implicit-function derivative of each stage) is reduced the same
+    way (see :meth:`transpose`).
     """
 
     def init(self, operator, options):
@@ -177,8 +178,10 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         return _ReducedState(lower, diag, upper, p_inv, gain, (r_l, r_d, r_u), lu, treedef, sizes)
 
     def compute(self, state, vector, options):
-        if isinstance(state, _State):  # transposed operator: general solve
+        if isinstance(state, _State):  # transposed general operator
             return super().compute(state, vector, options)
+        if isinstance(state, _ReducedTransposed):
+            return self._compute_transposed(state, vector)
         b = _flatten(vector, state.sizes)
         u = jnp.einsum("nij,nj->ni", state.p_inv, b[:, :3])
         rhs = b[:, 3:] - btd.matvec(*state.coupling, u)
@@ -188,7 +191,54 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
 
     def transpose(self, state, options):
+        """The transposed stage system, reduced to 3×3 blocks like the forward one.
+
+        Reverse mode through an implicit stage solves Aᵀx = b. With
+        A = [[P, Q], [R, S]] (P, Q node-local),
+        ``(S − R P⁻¹Q)ᵀ x₂ = b₂ − (P⁻¹Q)ᵀ b₁`` and ``x₁ = P⁻ᵀ(b₁ − Rᵀ x₂)``.
+        """
+        if isinstance(state, _ReducedTransposed):
+            return state.original, {}
         if isinstance(state, _State):
             return super().transpose(state, options)
-        full = _State(state.lower, state.diag, state.upper, None, state.treedef, state.sizes)
-        return super().transpose(full, options)
+        gain = state.gain
+        r_l, r_d, r_u = state.coupling
+        g_prev = jnp.concatenate([jnp.zeros_like(gain[:1]), gain[:-1]], axis=0)
+        g_next = jnp.concatenate([gain[1:], jnp.zeros_like(gain[:1])], axis=0)
+        s_l = state.lower[:, 3:, 3:] - r_l @ g_prev
+        s_d = state.diag[:, 3:, 3:] - r_d @ gain
+        s_u = state.upper[:, 3:, 3:] - r_u @ g_next
+        lu = btd.factor3(*_transpose_band(s_l, s_d, s_u))
+        out = _ReducedTransposed(_t(state.p_inv), _t(gain), _transpose_band(r_l, r_d, r_u), lu,
+                                 state, state.treedef, state.sizes)
+        return out, {}
+
+    def _compute_transposed(self, state, vector):
+        b = _flatten(vector, state.sizes)
+        rhs = b[:, 3:] - jnp.einsum("nij,nj->ni", state.gain_t, b[:, :3])
+        vel = btd.solve(state.lu, rhs)
+        pos = jnp.einsum("nij,nj->ni", state.p_inv_t,
+                         b[:, :3] - btd.matvec(*state.coupling_t, vel))
+        x = jnp.concatenate([pos, vel], axis=-1)
+        return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
+
+
+def _t(a):
+    return jnp.swapaxes(a, -1, -2)
+
+
+def _transpose_band(lower, diag, upper):
+    """Bands of Mᵀ from those of a block-tridiagonal M (conventions of ``btd``)."""
+    lo = jnp.concatenate([jnp.zeros_like(upper[:1]), _t(upper[:-1])], axis=0)
+    up = jnp.concatenate([_t(lower[1:]), jnp.zeros_like(lower[:1])], axis=0)
+    return lo, _t(diag), up
+
+
+class _ReducedTransposed(eqx.Module):
+    p_inv_t: Array  # (N, 3, 3) P⁻ᵀ
+    gain_t: Array  # (N, 3, 3) (P⁻¹Q)ᵀ
+    coupling_t: tuple  # bands of Rᵀ
+    lu: btd.BlockTridiagonalLU  # of (S − R P⁻¹Q)ᵀ
+    original: Any  # the forward state (transpose of the transpose)
+    treedef: Any = eqx.field(static=True)
+    sizes: tuple = eqx.field(static=True)
