@@ -41,6 +41,8 @@ class SimulationResult(eqx.Module):
         num_newton_iterations: Newton iterations of all implicit stages (only
             with ``simulate(..., count_newton=True)``, else ``None``).
         num_evaluations: vector-field evaluations (with ``count_newton``).
+        body_pose, body_velocity: (k, n_bodies, 6) displacements η [m, rad] and
+            velocities η̇ of the scene's floating bodies (``None`` without bodies).
     """
 
     ts: Array
@@ -57,6 +59,8 @@ class SimulationResult(eqx.Module):
     result: Any
     num_newton_iterations: Any = None
     num_evaluations: Any = None
+    body_pose: Any = None
+    body_velocity: Any = None
 
     def succeeded(self):
         return self.result == diffrax.RESULTS.successful
@@ -113,6 +117,8 @@ def _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, pr
         num_accepted_steps=sol.stats["num_accepted_steps"],
         num_rejected_steps=sol.stats["num_rejected_steps"],
         result=sol.result,
+        body_pose=outs["body_pose"][:-1] if "body_pose" in outs else None,
+        body_velocity=outs["body_velocity"][:-1] if "body_velocity" in outs else None,
     )
 
 
@@ -274,7 +280,9 @@ def simulate(
         scene: a :class:`moorjax.Scene`.
         duration: simulated time after ``t0`` [s] (or give ``ts``).
         ts: output times [s] (increasing, > t0); default every ``dt_out`` s.
-        init: tuple of :class:`LineState` (default: static equilibrium at t0).
+        init: tuple of :class:`LineState` (default: static equilibrium at t0),
+            followed by each body's 1-D state (default: at rest at η = 0 when
+            only line states are given).
         solver: a name from :data:`moorjax.dynamics.SOLVERS` or a diffrax solver.
         rtol: relative error-control tolerance (of node positions and velocities).
         atol: absolute tolerance of node positions [m] (default 0.1 mm: a
@@ -311,7 +319,9 @@ def simulate(
         progress=progress, scene=scene,
     )
     if init is None:
-        init = tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)
+        init = initial_state(scene, t0)
+    elif scene.bodies and len(init) == len(scene.lines):
+        init = tuple(init) + tuple(b.rest_state() for b in scene.bodies)
     _EVALUATIONS[0] = 0
     res = _integrate(
         scene, pack(init), p.ts, p.t0, p.solver, p.controller, p.dt0, p.max_steps,
@@ -331,6 +341,17 @@ def simulate(
     if throw and not isinstance(res.num_steps, jax.core.Tracer):
         _raise_on_failure(res, name, max_steps, fixed=dt is not None)
     return res
+
+
+def initial_state(scene, t0=0.0) -> tuple:
+    """The static equilibrium at t0 as a solver-ready state: line states, then each
+    body at rest at its equilibrium pose (mean loads included)."""
+    if not scene.bodies:
+        return tuple(solve_line_statics(line, scene.env, t0).state() for line in scene.lines)
+    from ..statics.system import solve_system_statics
+
+    st = solve_system_statics(scene, t0)
+    return st.state() + st.body_states(scene)
 
 
 def _raise_on_failure(res, name, max_steps, fixed=False):

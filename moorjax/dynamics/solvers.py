@@ -70,7 +70,8 @@ class VeryChord(diffrax.VeryChord):
 class StateNorm(eqx.Module):
     """RMS norm of a solver-state pytree with velocities weighted against positions.
 
-    Leaves are (n, 6) [r, v] arrays (or anything whose last axis is 6). The
+    Leaves are (n, 6) [r, v] arrays (or anything whose last axis is 6), or 1-D
+    body states (see :meth:`_body_weights`). The
     velocity columns are multiplied by ``velocity_weight`` = atol / atol_velocity,
     so that with the controller's ``atol`` in metres, a velocity error of
     ``atol_velocity`` [m/s] counts as much as a position error of ``atol`` [m].
@@ -81,12 +82,19 @@ class StateNorm(eqx.Module):
 
     velocity_weight: Array
 
+    def _body_weights(self, n):
+        """A body's 1-D state [η (6) m/rad, η̇ (6), radiation states]: η̇ weighted
+        like node velocities, the rest like positions."""
+        return jnp.concatenate([jnp.ones(6), jnp.full(6, 1.0) * self.velocity_weight,
+                                jnp.ones(n - 12)])
+
     def __call__(self, tree):
         w = jnp.concatenate([jnp.ones(3), jnp.full(3, 1.0) * self.velocity_weight])
         leaves = jax.tree_util.tree_leaves(tree)
         if not leaves:
             return jnp.asarray(0.0)
-        sq = sum(jnp.sum(jnp.abs(x * w) ** 2) for x in leaves)
+        sq = sum(jnp.sum(jnp.abs(x * (w if x.ndim != 1 else self._body_weights(x.shape[0]))) ** 2)
+                 for x in leaves)
         size = sum(x.size for x in leaves)
         value = jnp.sqrt(sq / size)
         return jnp.where(jnp.isnan(value), jnp.inf, value)

@@ -1,7 +1,8 @@
 """The scene's equations of motion as a first-order ODE on a pytree.
 
 Solver state: a tuple with one (n_i − 1, 6) array per line, the free nodes'
-[position, velocity] side by side. This node-major layout keeps each line's
+[position, velocity] side by side, followed by one 1-D array per floating body
+(its pose, velocity and radiation states; see :mod:`moorjax.body`). This node-major layout keeps each line's
 Jacobian block-tridiagonal (6×6 blocks), which the block-tridiagonal Newton solve
 exploits; a system of several lines stacks into one larger band.
 
@@ -23,13 +24,28 @@ from ..model.line import LineState
 
 
 def pack(states) -> tuple:
-    """Line states → solver state (tuple of (n−1, 6) arrays)."""
-    return tuple(jnp.concatenate([s.r, s.v], axis=-1) for s in states)
+    """States → solver state: each :class:`LineState` to an (n−1, 6) array; body
+    states (1-D arrays) pass through."""
+    return tuple(jnp.concatenate([s.r, s.v], axis=-1) if isinstance(s, LineState) else s
+                 for s in states)
 
 
 def unpack(y) -> tuple:
-    """Solver state → tuple of :class:`LineState`."""
-    return tuple(LineState(r=q[..., :3], v=q[..., 3:]) for q in y)
+    """Solver state → :class:`LineState` per line (body states stay 1-D arrays)."""
+    return tuple(LineState(r=q[..., :3], v=q[..., 3:]) if jnp.ndim(q) >= 2 else q for q in y)
+
+
+def _body_kinematics(y, scene):
+    """Line arrays, the lines with fairleads placed, and body (η, η̇) lists."""
+    n = len(scene.lines)
+    if not scene.bodies:
+        return y[:n], scene.lines, (), ()
+    from ..body.coupling import attach
+
+    zs = y[n:]
+    poses = [z[:6] for z in zs]
+    vels = [z[6:12] for z in zs]
+    return y[:n], attach(scene.lines, scene.bodies, poses, vels), poses, vels
 
 
 def _line_rate(line, q, env, t):
@@ -54,17 +70,36 @@ def line_groups(lines) -> list[list[int]]:
 
 
 def vector_field(t, y, scene):
-    """dy/dt for every line: (velocity, acceleration) of the free nodes."""
-    out = [None] * len(scene.lines)
-    for idx in line_groups(scene.lines):
+    """dy/dt: (velocity, acceleration) of every line's free nodes, then each body's rate."""
+    y_lines, lines, poses, vels = _body_kinematics(y, scene)
+    out = _line_rates(t, y_lines, lines, scene.env)
+    if not scene.bodies:
+        return out
+    from ..body.coupling import mooring_wrenches
+
+    ends = [_end_forces(line, q, scene.env, t) for line, q in zip(lines, y_lines)]
+    wrenches = mooring_wrenches(scene.lines, scene.bodies, poses, ends)
+    rates = tuple(body.rate(t, z, w) for body, z, w in
+                  zip(scene.bodies, y[len(scene.lines):], wrenches))
+    return out + rates
+
+
+def _end_forces(line, q, env, t):
+    r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+    return line.element.end_forces(line, env, r, v)
+
+
+def _line_rates(t, y, lines, env):
+    out = [None] * len(lines)
+    for idx in line_groups(lines):
         if len(idx) == 1:
             i = idx[0]
-            out[i] = _line_rate(scene.lines[i], y[i], scene.env, t)
+            out[i] = _line_rate(lines[i], y[i], env, t)
             continue
-        members = [dataclasses.replace(scene.lines[i], label="") for i in idx]
+        members = [dataclasses.replace(lines[i], label="") for i in idx]
         stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *members)
         q = jnp.stack([y[i] for i in idx])
-        rates = jax.vmap(_line_rate, in_axes=(0, 0, None, None))(stacked, q, scene.env, t)
+        rates = jax.vmap(_line_rate, in_axes=(0, 0, None, None))(stacked, q, env, t)
         for k, i in enumerate(idx):
             out[i] = rates[k]
     return tuple(out)
@@ -75,10 +110,12 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
 
     Returns a dict with ``force_a``, ``force_b`` (n_lines, 3) [N], ``tension_a``,
     ``tension_b`` (n_lines,) [N]; with ``with_nodes``, also ``positions`` and
-    ``segment_tensions``: tuples with one (n+1, 3) [m] / (n,) [N] array per line.
+    ``segment_tensions``: tuples with one (n+1, 3) [m] / (n,) [N] array per line;
+    with bodies, ``body_pose`` and ``body_velocity`` (n_bodies, 6).
     """
     fa, fb, pos, ten = [], [], [], []
-    for line, q in zip(scene.lines, y):
+    y_lines, lines, poses, vels = _body_kinematics(y, scene)
+    for line, q in zip(lines, y_lines):
         r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
         a, b = line.element.end_forces(line, scene.env, r, v)
         fa.append(a)
@@ -93,6 +130,9 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
         tension_a=jnp.linalg.norm(fa, axis=-1),
         tension_b=jnp.linalg.norm(fb, axis=-1),
     )
+    if scene.bodies:
+        out["body_pose"] = jnp.stack(poses)
+        out["body_velocity"] = jnp.stack(vels)
     if with_nodes:
         out["positions"] = tuple(pos)
         out["segment_tensions"] = tuple(ten)

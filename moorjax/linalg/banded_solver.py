@@ -95,25 +95,43 @@ def band_of(fn_mv, in_structure):
 class BlockTridiagonalSolver(lx.AbstractLinearSolver):
     """lineax solver exploiting the block-banded Jacobian of line states (O(n))."""
 
-    def init(self, operator, options):
-        del options
+    def _init_band(self, operator):
         lower, diag, upper, treedef, sizes = band_of(operator.mv, operator.in_structure())
         lu = btd.factor(lower, diag, upper)
         return _State(lower, diag, upper, lu, treedef, sizes)
 
-    def compute(self, state: _State, vector, options):
-        del options
+    def _compute_band(self, state: _State, vector):
         x = btd.solve(state.lu, _flatten(vector, state.sizes))
-        return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
+        return _unflatten(x, state.treedef, state.sizes)
 
-    def transpose(self, state: _State, options):
-        del options
+    def _transpose_band(self, state: _State):
         t = lambda a: jnp.swapaxes(a, -1, -2)  # noqa: E731
         lower = jnp.concatenate([jnp.zeros_like(state.upper[:1]), t(state.upper[:-1])], axis=0)
         upper = jnp.concatenate([t(state.lower[1:]), jnp.zeros_like(state.lower[:1])], axis=0)
         diag = t(state.diag)
         lu = btd.factor(lower, diag, upper)
-        return _State(lower, diag, upper, lu, state.treedef, state.sizes), {}
+        return _State(lower, diag, upper, lu, state.treedef, state.sizes)
+
+    # -- the lineax interface: bands plus dense blocks for 1-D leaves ---------
+    def init(self, operator, options):
+        del options
+        structure = operator.in_structure()
+        leaves, treedef = jtu.tree_flatten(structure)
+        if all(len(x.shape) == 2 for x in leaves):
+            return self._init_band(operator)
+        return _init_loose(self, operator, leaves, treedef)
+
+    def compute(self, state, vector, options):
+        del options
+        if isinstance(state, _LooseState):
+            return _compute_loose(self, state, vector)
+        return self._compute_band(state, vector), lx.RESULTS.successful, {}
+
+    def transpose(self, state, options):
+        del options
+        if isinstance(state, _LooseState):
+            return _transpose_loose(self, state), {}
+        return self._transpose_band(state), {}
 
     def conj(self, state: _State, options):
         return state, {}
@@ -160,8 +178,7 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
     way (see :meth:`transpose`).
     """
 
-    def init(self, operator, options):
-        del options
+    def _init_band(self, operator):
         lower, diag, upper, treedef, sizes = band_of(operator.mv, operator.in_structure())
         if diag.shape[-1] != 6:
             raise ValueError(f"SecondOrderBandSolver needs 6 dofs per node (r, v); got {diag.shape[-1]}")
@@ -177,9 +194,9 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         lu = btd.factor3(s_l, s_d, s_u)
         return _ReducedState(lower, diag, upper, p_inv, gain, (r_l, r_d, r_u), lu, treedef, sizes)
 
-    def compute(self, state, vector, options):
+    def _compute_band(self, state, vector):
         if isinstance(state, _State):  # transposed general operator
-            return super().compute(state, vector, options)
+            return super()._compute_band(state, vector)
         if isinstance(state, _ReducedTransposed):
             return self._compute_transposed(state, vector)
         b = _flatten(vector, state.sizes)
@@ -188,9 +205,9 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         vel = btd.solve(state.lu, rhs)
         pos = u - jnp.einsum("nij,nj->ni", state.gain, vel)
         x = jnp.concatenate([pos, vel], axis=-1)
-        return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
+        return _unflatten(x, state.treedef, state.sizes)
 
-    def transpose(self, state, options):
+    def _transpose_band(self, state):
         """The transposed stage system, reduced to 3×3 blocks like the forward one.
 
         Reverse mode through an implicit stage solves Aᵀx = b. With
@@ -198,9 +215,9 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         ``(S − R P⁻¹Q)ᵀ x₂ = b₂ − (P⁻¹Q)ᵀ b₁`` and ``x₁ = P⁻ᵀ(b₁ − Rᵀ x₂)``.
         """
         if isinstance(state, _ReducedTransposed):
-            return state.original, {}
+            return state.original
         if isinstance(state, _State):
-            return super().transpose(state, options)
+            return super()._transpose_band(state)
         gain = state.gain
         r_l, r_d, r_u = state.coupling
         g_prev = jnp.concatenate([jnp.zeros_like(gain[:1]), gain[:-1]], axis=0)
@@ -209,9 +226,8 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         s_d = state.diag[:, 3:, 3:] - r_d @ gain
         s_u = state.upper[:, 3:, 3:] - r_u @ g_next
         lu = btd.factor3(*_transpose_band(s_l, s_d, s_u))
-        out = _ReducedTransposed(_t(state.p_inv), _t(gain), _transpose_band(r_l, r_d, r_u), lu,
-                                 state, state.treedef, state.sizes)
-        return out, {}
+        return _ReducedTransposed(_t(state.p_inv), _t(gain), _transpose_band(r_l, r_d, r_u), lu,
+                                  state, state.treedef, state.sizes)
 
     def _compute_transposed(self, state, vector):
         b = _flatten(vector, state.sizes)
@@ -220,7 +236,7 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         pos = jnp.einsum("nij,nj->ni", state.p_inv_t,
                          b[:, :3] - btd.matvec(*state.coupling_t, vel))
         x = jnp.concatenate([pos, vel], axis=-1)
-        return _unflatten(x, state.treedef, state.sizes), lx.RESULTS.successful, {}
+        return _unflatten(x, state.treedef, state.sizes)
 
 
 def _t(a):
@@ -242,3 +258,81 @@ class _ReducedTransposed(eqx.Module):
     original: Any  # the forward state (transpose of the transpose)
     treedef: Any = eqx.field(static=True)
     sizes: tuple = eqx.field(static=True)
+
+
+# -- 1-D leaves (floating bodies): dense blocks beside the band ----------------
+#
+# A body's state is a short 1-D leaf coupled to the lines only through their
+# fairlead nodes. Its block of the Jacobian is taken exactly (one JVP per body
+# state entry) and solved by a dense LU; the couplings between the body and the
+# lines are left out of the Newton matrix (a block-Jacobi approximation). The
+# Newton iteration then contracts at a rate of about (c·dt)²·k/M — the fairleads'
+# stiffness against the body's mass, small for a moored hull — and its residual
+# test still decides convergence. Exact gradients (reverse mode through implicit
+# stages) need the exact Jacobian: use ``linear_solver="dense"`` for those.
+
+
+class _BandOperator:
+    """The operator restricted to the 2-D leaves (1-D leaves held at zero)."""
+
+    def __init__(self, operator, leaves, treedef, band_idx):
+        self._op, self._leaves, self._treedef, self._band = operator, leaves, treedef, band_idx
+
+    def in_structure(self):
+        return tuple(self._leaves[i] for i in self._band)
+
+    def mv(self, band_vec):
+        full = [jnp.zeros(x.shape, x.dtype) for x in self._leaves]
+        for i, v in zip(self._band, band_vec):
+            full[i] = v
+        out = jtu.tree_leaves(self._op.mv(jtu.tree_unflatten(self._treedef, full)))
+        return tuple(out[i] for i in self._band)
+
+
+class _LooseState(eqx.Module):
+    band: Any
+    blocks: tuple  # (lu, piv) per 1-D leaf
+    transposed: bool = eqx.field(static=True)
+    band_idx: tuple = eqx.field(static=True)
+    loose_idx: tuple = eqx.field(static=True)
+    treedef: Any = eqx.field(static=True)
+
+
+def _init_loose(solver, operator, leaves, treedef):
+    band_idx = tuple(i for i, x in enumerate(leaves) if len(x.shape) == 2)
+    loose_idx = tuple(i for i, x in enumerate(leaves) if len(x.shape) == 1)
+    if len(band_idx) + len(loose_idx) != len(leaves):
+        raise ValueError(f"structured Newton solve: leaves must be (n, 6) line states or 1-D body "
+                         f"states; got shapes {[x.shape for x in leaves]}")
+    band = solver._init_band(_BandOperator(operator, leaves, treedef, band_idx)) if band_idx else None
+    blocks = []
+    for i in loose_idx:
+        n = leaves[i].shape[0]
+
+        def column(e, i=i):
+            full = [jnp.zeros(x.shape, x.dtype) for x in leaves]
+            full[i] = e
+            return jtu.tree_leaves(operator.mv(jtu.tree_unflatten(treedef, full)))[i]
+
+        cols = jax.vmap(column)(jnp.eye(n, dtype=leaves[i].dtype))  # row k = A e_k
+        blocks.append(jax.scipy.linalg.lu_factor(cols.T))
+    return _LooseState(band, tuple(blocks), False, band_idx, loose_idx, treedef)
+
+
+def _compute_loose(solver, state, vector):
+    vec = jtu.tree_leaves(vector)
+    out = [None] * len(vec)
+    if state.band is not None:
+        xb = solver._compute_band(state.band, tuple(vec[i] for i in state.band_idx))
+        for i, x in zip(state.band_idx, jtu.tree_leaves(xb)):
+            out[i] = x
+    trans = 1 if state.transposed else 0
+    for i, blk in zip(state.loose_idx, state.blocks):
+        out[i] = jax.scipy.linalg.lu_solve(blk, vec[i], trans=trans)
+    return jtu.tree_unflatten(state.treedef, out), lx.RESULTS.successful, {}
+
+
+def _transpose_loose(solver, state):
+    band = None if state.band is None else solver._transpose_band(state.band)
+    return _LooseState(band, state.blocks, not state.transposed, state.band_idx,
+                       state.loose_idx, state.treedef)

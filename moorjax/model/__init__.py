@@ -7,7 +7,9 @@ from .axial import PolyesterMBL as PolyesterMBL
 from .axial import PolyesterWu as PolyesterWu
 from .axial import TabulatedEA as TabulatedEA
 from .ends import AbstractEnd as AbstractEnd
+from .ends import BodyEnd as BodyEnd
 from .ends import FixedEnd as FixedEnd
+from .ends import KinematicEnd as KinematicEnd
 from .ends import SinePath as SinePath
 from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
@@ -30,7 +32,9 @@ __all__ = [
     'AddedMass',
     'Bilateral',
     'Environment',
+    'BodyEnd',
     'FixedEnd',
+    'KinematicEnd',
     'Line',
     'LineState',
     'LineType',

@@ -1,4 +1,4 @@
-"""End conditions of a line: a fixed point or a prescribed motion.
+"""End conditions of a line: a fixed point, a prescribed motion or a body's fairlead.
 
 An end gives its position [m], velocity [m/s] and acceleration [m/s²] at time t
 [s]. Paths are pure functions of t and differentiable in their parameters.
@@ -42,6 +42,68 @@ class FixedEnd(AbstractEnd):
 
     def position(self, t):
         return self.point
+
+    def velocity(self, t):
+        return jnp.zeros(3)
+
+    def acceleration(self, t):
+        return jnp.zeros(3)
+
+
+class KinematicEnd(AbstractEnd):
+    """An end at ``point`` moving with ``velocity`` at this instant (no acceleration).
+
+    What a :class:`BodyEnd` becomes once its body's state is known (inside the
+    vector field); rarely built by hand.
+    """
+
+    point: Array
+    speed: Array
+
+    def __init__(self, point, velocity):
+        self.point = jnp.asarray(point, dtype=float).reshape(3)
+        self.speed = jnp.asarray(velocity, dtype=float).reshape(3)
+
+    def position(self, t):
+        return self.point
+
+    def velocity(self, t):
+        return self.speed
+
+    def acceleration(self, t):
+        return jnp.zeros(3)
+
+
+class BodyEnd(AbstractEnd):
+    """A fairlead fixed to body number ``body`` of the scene.
+
+    Args:
+        body: index of the body in ``Scene.bodies`` (structure).
+        point: (3,) fairlead position in body axes, relative to the body's centre
+            of gravity [m].
+        origin: (3,) the body's centre of gravity at rest [m] (set by the scene
+            from the body; needed only to place the end when the body's state is
+            not at hand, e.g. a line's statics at rest).
+
+    Inside a simulation the end follows the body: the scene replaces it by a
+    :class:`KinematicEnd` at the body's current pose.
+    """
+
+    point: Array
+    origin: Array
+    body: int = eqx.field(static=True, default=0)
+
+    def __init__(self, body, point, origin=(0.0, 0.0, 0.0)):
+        if int(body) != body or body < 0:
+            raise ValueError(f"body index = {body} must be an integer >= 0")
+        check_finite(point, "fairlead position in body axes", "m")
+        check_finite(origin, "body origin", "m")
+        self.body = int(body)
+        self.point = jnp.asarray(point, dtype=float).reshape(3)
+        self.origin = jnp.asarray(origin, dtype=float).reshape(3)
+
+    def position(self, t):
+        return self.origin + self.point
 
     def velocity(self, t):
         return jnp.zeros(3)

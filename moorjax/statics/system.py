@@ -1,0 +1,196 @@
+"""Static equilibrium of a mooring system with floating bodies, and its stiffness.
+
+The bodies' equilibrium poses η solve ``F_body(η) + F_moor(η) = 0`` per body,
+where F_body holds the hydrostatic restoring force −Cη, a constant
+``static_force`` and the mean of each external load (a load's ``mean_force()``
+where it has one, e.g. the mean wave drift, otherwise its ``force(t)``), and
+F_moor is the wrench of the lines, each in its own static equilibrium with its
+fairleads where the poses put them. The Newton iteration on the 6·n_bodies
+unknowns takes its Jacobian by forward-mode AD through the lines' static solves
+(whose implicit-function gradients make it exact); one compiled function serves
+every iteration.
+
+:func:`mooring_stiffness` is the linearised 6×6 stiffness −∂F_moor/∂η of the
+lines at a pose, by the same AD; the system's stiffness is that plus C.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from ..body.coupling import attach, mooring_wrenches
+from .fem import LineStatics, _check_geometry, solve_line_statics
+
+
+class SystemStatics(eqx.Module):
+    """The equilibrium of a scene with bodies.
+
+    Attributes:
+        poses: (n_bodies, 6) body displacements η [m, rad].
+        lines: one :class:`LineStatics` per line.
+        mooring: (n_bodies, 6) wrench of the lines on each body [N, N·m].
+        residual: (n_bodies, 6) force imbalance left [N, N·m].
+        iterations: Newton iterations used.
+        converged: whether the imbalance met the tolerance.
+    """
+
+    poses: Array
+    lines: tuple
+    mooring: Array
+    residual: Array
+    iterations: int
+    converged: bool
+
+    def state(self) -> tuple:
+        """Initial solver state for :func:`moorjax.simulate`: line states, then
+        each body at rest at its pose (radiation memory empty)."""
+        return tuple(st.state() for st in self.lines)
+
+    def body_states(self, scene) -> tuple:
+        return tuple(b.rest_state(p) for b, p in zip(scene.bodies, self.poses))
+
+
+def _line_statics_at(scene, poses, t):
+    vel = [jnp.zeros(6)] * len(scene.bodies)
+    lines = attach(scene.lines, scene.bodies, list(poses), vel)
+    return tuple(solve_line_statics(ln, scene.env, t, throw=False) for ln in lines)
+
+
+def mooring_wrench(scene, poses, t=0.0) -> Array:
+    """(n_bodies, 6) static wrench of the lines on each body at poses (n_bodies, 6)."""
+    poses = jnp.asarray(poses, dtype=float).reshape(len(scene.bodies), 6)
+    st = _line_statics_at(scene, poses, t)
+    ends = [(s.force_a, s.force_b) for s in st]
+    return jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses), ends))
+
+
+def _mean_load(load, t):
+    mean = getattr(load, "mean_force", None)
+    return mean() if callable(mean) else load.force(t)
+
+
+def body_forces(scene, poses, t=0.0, loads=True) -> Array:
+    """(n_bodies, 6) static non-mooring forces at poses: −Cη + static + mean loads."""
+    out = []
+    for body, pose in zip(scene.bodies, poses):
+        f = -body.hydrostatic @ pose
+        if body.static_force is not None:
+            f = f + body.static_force
+        if loads:
+            for ld in body.loads:
+                f = f + _mean_load(ld, t)
+        out.append(f)
+    return jnp.stack(out)
+
+
+@eqx.filter_jit
+def _newton_parts(scene, poses, t, loads):
+    def imbalance(p):
+        return body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t)
+
+    g, jvp_fn = jax.linearize(imbalance, poses)
+    jac = jax.vmap(jvp_fn)(jnp.eye(poses.size).reshape((poses.size,) + poses.shape))
+    jac = jac.reshape(poses.size, poses.size).T
+    return g, jac
+
+
+def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: float = 1e-6,
+                         max_iterations: int = 50, throw: bool = True) -> SystemStatics:
+    """Equilibrium poses of the scene's bodies and the lines' static shapes.
+
+    Args:
+        scene: a scene with at least one body.
+        t: time of the line ends that are not on bodies, and of loads without a
+            ``mean_force`` [s].
+        loads: include the bodies' mean external loads (else hydrostatics only).
+        init: (n_bodies, 6) starting poses (default zero).
+        tol: relative force tolerance, on the scale of the lines' tensions and
+            the bodies' loads.
+        max_iterations: Newton iterations allowed.
+        throw: raise ``RuntimeError`` when it does not converge.
+    """
+    if not scene.bodies:
+        raise ValueError("solve_system_statics needs a scene with bodies; use solve_statics")
+    nb = len(scene.bodies)
+    poses = jnp.zeros((nb, 6)) if init is None else jnp.asarray(init, float).reshape(nb, 6)
+    for line in attach(scene.lines, scene.bodies, list(poses), [jnp.zeros(6)] * nb):
+        _check_geometry(line, scene.env, t)  # names a line that cannot reach its ends
+    t = jnp.asarray(t, dtype=float)
+    scale = None
+    converged = False
+    it = 0
+    for it in range(1, max_iterations + 1):
+        g, jac = _newton_parts(scene, poses, t, bool(loads))
+        g_np = np.asarray(g)
+        if not np.all(np.isfinite(g_np)) or not np.all(np.isfinite(np.asarray(jac))):
+            break
+        if scale is None:
+            st = _line_statics_at(scene, poses, t)
+            tens = max(float(jnp.max(jnp.abs(s.tensions))) for s in st)
+            scale = max(tens, float(np.max(np.abs(g_np))), 1.0)
+        # moments are compared on the same scale times a unit lever arm
+        if np.max(np.abs(g_np)) < tol * scale:
+            converged = True
+            break
+        step = np.linalg.solve(np.asarray(jac), -g_np.ravel()).reshape(nb, 6)
+        # damp large rotations and translations (the line statics must stay reachable)
+        big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
+        poses = poses + jnp.asarray(step / big)
+    st = _line_statics_at(scene, poses, t)
+    wrench = mooring_wrench(scene, poses, t)
+    residual = body_forces(scene, poses, t, loads) + wrench
+    lines_ok = all(bool(s.converged) for s in st)
+    out = SystemStatics(poses, st, wrench, residual, it, bool(converged and lines_ok))
+    if throw and not out.converged:
+        bad = [scene.lines[i].label for i, s in enumerate(st) if not bool(s.converged)]
+        why = (f"the static solve of line(s) {', '.join(bad)} failed (can they reach their "
+               "anchors?)" if bad else
+               f"force imbalance {np.max(np.abs(np.asarray(residual))):.3g} N after {it} Newton "
+               "iterations")
+        raise RuntimeError(f"system statics did not converge: {why}")
+    return out
+
+
+def mooring_stiffness(scene, poses=None, t=0.0) -> Array:
+    """Linearised mooring stiffness K = −∂F_moor/∂η, (6·n_bodies, 6·n_bodies).
+
+    Exact (forward-mode AD through the lines' static solves); rows and columns
+    ordered body by body as (surge, sway, heave, roll, pitch, yaw).
+    """
+    nb = len(scene.bodies)
+    poses = jnp.zeros((nb, 6)) if poses is None else jnp.asarray(poses, float).reshape(nb, 6)
+    jac = jax.jacfwd(lambda p: mooring_wrench(scene, p.reshape(nb, 6), t).ravel())(poses.ravel())
+    return -jac
+
+
+def system_stiffness(scene, poses=None, t=0.0) -> Array:
+    """Hydrostatic plus mooring stiffness (6·n_bodies square) [N/m, N, N·m/rad]."""
+    k = mooring_stiffness(scene, poses, t)
+    hs = jax.scipy.linalg.block_diag(*[b.hydrostatic for b in scene.bodies])
+    return k + hs
+
+
+def offset_curve(scene, offsets, dof: int = 0, body: int = 0, t=0.0) -> Array:
+    """Restoring force of the lines −F_moor[dof] (k,) at prescribed offsets (k,) of one dof.
+
+    The other degrees of freedom stay at zero (the paper's static offset test).
+    Returned relative to the force at zero offset, so it is the restoring force
+    the moorings add [N or N·m].
+    """
+    nb = len(scene.bodies)
+    offsets = jnp.asarray(offsets, dtype=float)
+
+    def at(x):
+        p = jnp.zeros((nb, 6)).at[body, dof].set(x)
+        return -mooring_wrench(scene, p, t)[body, dof]
+
+    f0 = at(0.0)
+    return jnp.stack([at(x) for x in offsets]) - f0
+
+
+__all__ = ["SystemStatics", "LineStatics", "solve_system_statics", "mooring_stiffness",
+           "system_stiffness", "offset_curve", "mooring_wrench", "body_forces"]
