@@ -69,8 +69,11 @@ def mooring_wrench(scene, poses, t=0.0) -> Array:
 
 
 def _mean_load(load, t):
-    mean = getattr(load, "mean_force", None)
-    return mean() if callable(mean) else load.force(t)
+    for name in ("mean_force", "mean_drift"):  # a wave load's mean is its drift
+        mean = getattr(load, name, None)
+        if callable(mean):
+            return mean()
+    return load.force(t)
 
 
 def body_forces(scene, poses, t=0.0, loads=True) -> Array:
