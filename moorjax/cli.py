@@ -33,12 +33,12 @@ def _deck_path(arg: str) -> str:
 
 
 def _load(args, motion_path=None):
-    from .io import build_scene, coupled_point_ids, read_deck, read_motion
+    from .io import build_scene, read_deck, read_deck_motion
 
     deck = read_deck(_deck_path(args.deck))
     motion = None
     if motion_path is not None:
-        motion = read_motion(motion_path, coupled_point_ids(deck))
+        motion = read_deck_motion(motion_path, deck)
     return deck, build_scene(deck, segments=args.segments, motion=motion), motion
 
 
@@ -83,8 +83,9 @@ def cmd_statics(args) -> int:
     return 0
 
 
-def _load_for_dynamics(args):
-    """Deck, scene and simulate() keyword arguments from the shared options."""
+def _load_for_dynamics(args, with_motion=False):
+    """Deck, scene and simulate() keyword arguments from the shared options
+    (and the motion read, with ``with_motion``)."""
     if not (np.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration = {args.duration} s must be > 0")
     deck, scene, motion = _load(args, args.motion)
@@ -101,16 +102,16 @@ def _load_for_dynamics(args):
         dt=args.dt,
         dt_out=args.dt_out,
     )
-    return deck, scene, kwargs
+    return (deck, scene, kwargs, motion) if with_motion else (deck, scene, kwargs)
 
 
 def cmd_simulate(args) -> int:
     import jax
 
     from .dynamics import simulate
-    from .io import coupled_point_ids
+    from .io import coupled_body_ids, coupled_point_ids
 
-    deck, scene, kwargs = _load_for_dynamics(args)
+    deck, scene, kwargs, motion = _load_for_dynamics(args, with_motion=True)
     t0 = time.perf_counter()
     res = simulate(scene, args.duration, **kwargs)
     jax.block_until_ready(res.tension_b)
@@ -136,6 +137,9 @@ def cmd_simulate(args) -> int:
                 total += res.force_b[:, j]
         cols += [f"P{pid}_Fx", f"P{pid}_Fy", f"P{pid}_Fz"]
         data += [total[:, 0], total[:, 1], total[:, 2]]
+    for bid in coupled_body_ids(deck):
+        cols += [f"B{bid}_{c}" for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
+        data += list(_body_loads(deck, scene, motion, res, bid).T)
     np.savetxt(args.out, np.column_stack(data), delimiter=",", header=",".join(cols), comments="")
     if args.stats:
         stats = dict(
@@ -148,6 +152,28 @@ def cmd_simulate(args) -> int:
         )
         print(json.dumps(stats), file=sys.stderr)
     return 0
+
+
+def _body_loads(deck, scene, motion, res, body_id):
+    """(k, 6) force [N] and moment about the body's reference point [N·m] (global
+    axes) of the lines on a coupled body, at the output times."""
+    import jax
+
+    from .io import body_reference_end
+
+    ts = np.asarray(res.ts)
+    ref = np.asarray(jax.vmap(body_reference_end(deck, body_id, motion).position)(ts))
+    out = np.zeros((len(ts), 6))
+    for j, dl in enumerate(deck.lines):
+        for name, pid, force in (("a", dl.point_a, res.force_a), ("b", dl.point_b, res.force_b)):
+            if deck.points[pid].body != body_id:
+                continue
+            end = getattr(scene.lines[j], f"end_{name}")
+            r = np.asarray(jax.vmap(end.position)(ts))
+            f = np.asarray(force[:, j])
+            out[:, :3] += f
+            out[:, 3:] += np.cross(r - ref, f)
+    return out
 
 
 def cmd_ensemble(args) -> int:
@@ -261,7 +287,8 @@ def _dynamics_options(d):
 
     d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
-    d.add_argument("--motion", help="CSV of coupled-point motion (t, P<id>_x, ...)")
+    d.add_argument("--motion", help="CSV of coupled-point and coupled-body motion "
+                   "(t, P<id>_x, ..., B<id>_x, ..., B<id>_roll [rad], ...)")
     d.add_argument("--segments", type=_positive_int, help="override every line's segment count")
     d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
     d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5)")

@@ -328,7 +328,9 @@ ERROR_CASES = {
     "point below seabed": ({P1: "1  Fixed  -853.87 0.0 -400.0  0 0 0 0"}, P1, ["-400.0", "seabed", "320.0"]),
     "free point": ({P2: "2  Free -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Free'", "not supported"]),
     "connect point": ({P2: "2  Connect -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Connect'", "not supported"]),
-    "body point": ({P2: "2  Body1 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body1'", "not supported"]),
+    "body point, no bodies": ({P2: "2  Body1 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body1'", "no body with id 1", "no BODIES"]),
+    "body point without number": ({P2: "2  Body -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body'", "Body<n>"]),
+    "body point zero": ({P2: "2  Body0 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body0'", "Body<n>"]),
     "turbine point": ({P2: "2  Turbine3 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Turbine3'", "not supported"]),
     "unknown point type": ({P2: "2  Floating -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Floating'", "Fixed"]),
     # LINES
@@ -344,7 +346,7 @@ ERROR_CASES = {
     "line negative segments": ({L: "1  main  1  2  902.2  -4  -"}, L, ["NumSegs = -4", "> 0"]),
     "line fractional segments": ({L: "1  main  1  2  902.2  12.5  -"}, L, ["NumSegs = '12.5'", "integer"]),
     "line rod attachment": ({L: "1  main  R1A  2  902.2  160  -"}, L, ["'R1A'", "not supported"]),
-    "line body attachment": ({L: "1  main  1  B1  902.2  160  -"}, L, ["'B1'", "not supported"]),
+    "line body attachment": ({L: "1  main  1  B1  902.2  160  -"}, L, ["'B1'", "names a point, not a body", "Body<n>"]),
     "line garbage attachment": ({L: "1  main  1  x2  902.2  160  -"}, L, ["'x2'", "point id"]),
     "duplicate line": ({L: ["1  main  1  2  902.2  160  -", "1  main  1  2  900.0  160  -"]}, L + 1, ["duplicate", "id 1"]),
     # OPTIONS
@@ -356,11 +358,11 @@ ERROR_CASES = {
     "option waves": ({33: ["0 writeLog", "1 WaveKin"]}, 34, ["WaveKin = 1", "not supported"]),
     "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "not supported"]),
     # structure
-    "bodies row": (
+    "bodies row, unknown kind": (
         {POINTS_HDR: ["------ BODIES ------", "ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca",
                   "(#) (-) (m) (m) (m) (deg) (deg) (deg) (kg) (m) (kg-m^2) (m^3) (m^2) (-)",
-                  "1 coupled 0 0 0 0 0 0 0 0 0 0 0 0", "---------------------- POINTS ----------------"]},
-        P1, ["BODIES", "not supported"],
+                  "1 floating 0 0 0 0 0 0 0 0 0 0 0 0", "---------------------- POINTS ----------------"]},
+        P1, ["BODIES id 1", "'floating'", "Coupled"],
     ),
     "rods row": (
         {LINES_HDR: ["------ RODS ------", "ID RodType Attachment Xa Ya Za Xb Yb Zb NumSegs RodOutputs",

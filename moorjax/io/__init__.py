@@ -1,7 +1,10 @@
 """Input and output at the edge: MoorDyn decks, motion files, scene building."""
 
+from .build import body_reference_end as body_reference_end
 from .build import build_scene as build_scene
+from .build import coupled_body_ids as coupled_body_ids
 from .build import coupled_point_ids as coupled_point_ids
+from .build import read_deck_motion as read_deck_motion
 from .deck import Deck as Deck
 from .deck import parse_deck as parse_deck
 from .deck import read_deck as read_deck

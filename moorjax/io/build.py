@@ -11,12 +11,25 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Seabed: ``kBot`` [Pa/m] and ``cBot`` [Pa·s/m] on d·l; ``FrictionCoefficient``
   > 0 adds smoothed Coulomb friction (slip velocity 0.01 m/s).
 - Coupled points hold their deck position unless a motion is given.
+- Bodies (``BODIES``): a point ``Body<n>`` is fixed in body n, its coordinates
+  in body axes relative to the body's reference point (X0, Y0, Z0), placed at
+  (X0, Y0, Z0) + R·p with MoorDyn's R = Rx(r0)·Ry(p0)·Rz(y0) (degrees in the
+  deck; :mod:`moorjax.io.frames`). A ``fixed`` body's points are
+  :class:`FixedEnd` s there. A ``coupled`` body's points hold that place unless
+  the motion gives the body's 6-DOF pose (``B<n>_x ... B<n>_yaw``): then each
+  point follows the full (not linearised) rigid-body transform of the sampled
+  poses — exact at the sample times, velocities from the sampled rates when
+  given — interpolated per point like a coupled point's path. ``free`` and
+  ``coupledpinned`` bodies are refused (:func:`build_scene` says why and what to
+  do instead); a body's mass, CG, inertia, volume, CdA and Ca are not used.
 
 Scene structure follows the deck: no drag / added mass terms when their
 coefficients are all zero, no seabed term when every line is buoyant.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import numpy as np
 
@@ -34,8 +47,10 @@ from ..model import (
     TabulatedPath,
 )
 from ..model.scene import Scene
-from .deck import Deck, options_with_defaults
-from .errors import InputError
+from .deck import Deck, DeckBody, DeckPoint, options_with_defaults
+from .errors import InputError, InputWarning
+from .frames import body_point_positions, body_point_velocities
+from .motion import Motion, read_motion
 
 
 def _axial(dt):
@@ -60,13 +75,72 @@ def coupled_point_ids(deck: Deck) -> list[int]:
     return [p.id for p in deck.points.values() if p.attachment == "coupled"]
 
 
+def coupled_body_ids(deck: Deck) -> list[int]:
+    """Ids of the deck's coupled (caller-driven, 6-DOF) bodies, in file order."""
+    return [b.id for b in deck.bodies.values() if b.attachment == "coupled"]
+
+
+def read_deck_motion(path, deck: Deck) -> Motion:
+    """The motion file ``path`` read for all of the deck's coupled points and bodies."""
+    return read_motion(path, coupled_point_ids(deck), coupled_body_ids(deck))
+
+
+def _check_body_supported(deck: Deck, body: DeckBody) -> None:
+    where = f"{deck.path}:{body.source_line}: BODIES id {body.id}"
+    if body.attachment == "free":
+        raise InputError(
+            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck. "
+            "moorjax's moving body, moorjax.body.RigidBody, is a floating (Cummins-form) body: it "
+            "needs a hydrostatic restoring matrix with positive heave stiffness C[2,2] [N/m] and "
+            "added mass [kg], which a deck does not carry (it gives Mass, CG, I, Volume, CdA, Ca "
+            "only). Build it in Python instead: body = moorjax.body.RigidBody(mass, inertia, "
+            "hydrostatic=C, added_mass=A, origin=<centre of gravity [m]>), end each line on "
+            "moorjax.BodyEnd(0, <fairlead in body axes relative to the centre of gravity [m]>) and "
+            "simulate moorjax.Scene(lines, env, bodies=[body]); read_deck(...).bodies and .points "
+            "give the deck's values. Or make the body Fixed or Coupled in the deck."
+        )
+    if body.attachment == "coupled_pinned":
+        raise InputError(
+            f"{where}: Attachment = coupledpinned: bodies with a prescribed position and free "
+            "rotation are not supported; make the body Coupled (whole pose prescribed) or Fixed"
+        )
+
+
+def _body_point_end(deck: Deck, point: DeckPoint, motion: Motion | None):
+    body = deck.bodies[point.body]
+    if body.attachment == "coupled" and motion is not None and body.id in motion.body_poses:
+        poses = motion.body_poses[body.id]
+        rates = motion.body_rates.get(body.id)
+        r = body_point_positions(poses, point.position)
+        v = None if rates is None else body_point_velocities(poses, rates, point.position)
+        return TabulatedPath(motion.t, r, v)
+    return FixedEnd(deck.point_position(point.id))
+
+
+def body_reference_end(deck: Deck, body_id: int, motion: Motion | None = None):
+    """Where body ``body_id``'s reference point (X0, Y0, Z0) is, as an end
+    (:class:`FixedEnd`, or a :class:`TabulatedPath` for a coupled body the
+    motion drives) — e.g. to take moments of line forces about it."""
+    body = deck.bodies[body_id]
+    if body.attachment == "coupled" and motion is not None and body.id in motion.body_poses:
+        rates = motion.body_rates.get(body.id)
+        poses = motion.body_poses[body.id]
+        return TabulatedPath(motion.t, poses[:, :3], None if rates is None else rates[:, :3])
+    return FixedEnd(body.position)
+
+
 def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
     """A :class:`Scene` from a deck.
 
     Args:
         deck: from :func:`moorjax.io.read_deck`.
         segments: overrides every line's segment count.
-        motion: optional :class:`moorjax.io.Motion` driving coupled points.
+        motion: optional :class:`moorjax.io.Motion` driving coupled points and
+            coupled bodies (read it with :func:`read_deck_motion`).
+
+    Raises:
+        InputError: bad ``segments``, no water depth, or a body kind that cannot
+            be built (``free``, ``coupledpinned``).
     """
     if segments is not None and (int(segments) != segments or segments < 1):
         raise InputError(f"--segments = {segments} must be an integer >= 1")
@@ -75,9 +149,22 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
     if depth <= 0:
         raise InputError(f"{deck.path}: WtrDpth = {depth} m must be > 0")
 
+    for body in deck.bodies.values():
+        _check_body_supported(deck, body)
+        if body.attachment == "coupled" and motion is not None and body.id not in motion.body_poses:
+            warnings.warn(
+                f"{deck.path}:{body.source_line}: BODIES id {body.id}: the motion {motion.path!r} was "
+                f"read without body {body.id}; the coupled body holds its deck pose (read the motion "
+                "with moorjax.io.read_deck_motion to drive it)",
+                InputWarning,
+                stacklevel=2,
+            )
+
     ends = {}
     for p in deck.points.values():
-        if p.attachment == "coupled" and motion is not None and p.id in motion.positions:
+        if p.body is not None:
+            ends[p.id] = _body_point_end(deck, p, motion)
+        elif p.attachment == "coupled" and motion is not None and p.id in motion.positions:
             ends[p.id] = TabulatedPath(motion.t, motion.positions[p.id], motion.velocities[p.id])
         else:
             ends[p.id] = FixedEnd(p.position)

@@ -16,10 +16,14 @@ Values are whitespace-separated; ``!``, ``#`` and ``%`` start a comment.
 Blank lines inside sections are skipped.
 
 Only what moorjax can simulate is accepted: lines between ``Fixed``/``Anchor``
-and ``Coupled``/``Vessel`` points.  Free points, bodies, rods, failures,
-external loads, waves, currents and 3-D bathymetry raise :class:`InputError`
-("not supported yet").  Everything is validated on reading; every error names
-``file:line``, the field, the value as written, its unit and what is expected.
+and ``Coupled``/``Vessel`` points and points fixed in bodies (``Body1``, ...).
+``BODIES`` rows of every kind (``fixed``, ``coupled``, ``free``,
+``coupledpinned``) are read into :class:`DeckBody` records;
+:func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
+others with the reason.  Free points, rods, failures, external loads, waves,
+currents and 3-D bathymetry raise :class:`InputError` ("not supported yet").
+Everything is validated on reading; every error names ``file:line``, the
+field, the value as written, its unit and what is expected.
 
 Units are SI throughout (m, kg, N, s).  Axes follow MoorDyn: z up, z = 0 at the
 free surface, seabed at z = -WtrDpth.
@@ -32,14 +36,16 @@ from __future__ import annotations
 import math
 import re
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import InputError, InputWarning
+from .frames import body_point_positions
 
 __all__ = [
     "DeckLineType",
     "DeckPoint",
+    "DeckBody",
     "DeckLine",
     "Deck",
     "read_deck",
@@ -93,19 +99,22 @@ class DeckLineType:
 
 @dataclass(frozen=True)
 class DeckPoint:
-    """One row of ``POINTS``: a line end that is held fixed or driven by the caller.
+    """One row of ``POINTS``: a line end held fixed, driven by the caller, or fixed in a body.
 
     Attributes:
         id: point number (1, 2, 3, ... in file order).
-        attachment: ``'fixed'`` (Fixed/Anchor/Fix) or ``'coupled'``
-            (Coupled/Vessel/Ves/Cpld/Fairlead).
+        attachment: ``'fixed'`` (Fixed/Anchor/Fix), ``'coupled'``
+            (Coupled/Vessel/Ves/Cpld/Fairlead) or ``'body'`` (Body<n>).
         position: (x, y, z) [m], global frame; for coupled points the initial
-            position.
+            position; for body points the position in the body's axes relative
+            to its reference point (X0, Y0, Z0) (see :meth:`Deck.point_position`
+            for the global one).
         mass: point mass [kg].
         volume: displaced volume [m³].
         cda: drag coefficient times area [m²].
         ca: added-mass coefficient [-].
         source_line: 1-based line number of the row in the deck.
+        body: id of the body a ``'body'`` point is fixed in, else ``None``.
     """
 
     id: int
@@ -116,6 +125,54 @@ class DeckPoint:
     cda: float
     ca: float
     source_line: int
+    body: int | None = None
+
+
+@dataclass(frozen=True)
+class DeckBody:
+    """One row of ``BODIES``: a rigid body that points (and so lines) are fixed in.
+
+    Attributes:
+        id: body number (1, 2, 3, ... in file order).
+        attachment: ``'fixed'`` (Fixed/Fix/Anchor), ``'coupled'``
+            (Coupled/Vessel/Ves/Cpld: pose driven by the caller), ``'free'``
+            (Free: moved by its loads) or ``'coupled_pinned'``
+            (CoupledPinned/VesselPinned/VesPin/CpldPin: position driven,
+            rotation free).
+        position: (X0, Y0, Z0) [m], the body reference point in the global
+            frame (initial position of a coupled body).
+        orientation: (r0, p0, y0) roll, pitch, yaw [deg] as written; the body
+            axes are R = Rx(r0)·Ry(p0)·Rz(y0) (see :mod:`moorjax.io.frames`).
+        mass: body mass [kg] (without attached points and rods).
+        cg: (x, y, z) centre of gravity in body axes [m] (one value in the
+            deck is z, x = y = 0).
+        inertia: (Ixx, Iyy, Izz) [kg·m²] (one value in the deck is all three).
+        volume: displaced volume [m³].
+        cda: (6,) drag coefficient × area per degree of freedom, x, y, z then
+            the three rotations [m²]: one value in the deck is all six, two
+            are translation|rotation, three are x|y|z for both, or six.
+        ca: (3,) added-mass coefficients [-] (one value is all three).
+        source_line: 1-based line number of the row in the deck.
+
+    Mass, CG, inertia, volume, CdA and Ca only matter to free bodies; MoorDyn
+    ignores them for fixed and coupled ones, and so does moorjax.
+    """
+
+    id: int
+    attachment: str
+    position: tuple[float, float, float]
+    orientation: tuple[float, float, float]
+    mass: float
+    cg: tuple[float, float, float]
+    inertia: tuple[float, float, float]
+    volume: float
+    cda: tuple[float, float, float, float, float, float]
+    ca: tuple[float, float, float]
+    source_line: int
+
+    def pose(self) -> tuple[float, ...]:
+        """(6,) pose x, y, z [m], roll, pitch, yaw [rad] (the deck's r0, p0, y0 in radians)."""
+        return (*self.position, *(math.radians(a) for a in self.orientation))
 
 
 @dataclass(frozen=True)
@@ -165,6 +222,8 @@ class Deck:
             filled in: see :func:`options_with_defaults`.
         warnings: human-readable warnings (each also emitted with
             :func:`warnings.warn` as :class:`~moorjax.io.errors.InputWarning`).
+        bodies: body id -> :class:`DeckBody`, in file order (empty without a
+            ``BODIES`` section).
     """
 
     path: str
@@ -174,6 +233,16 @@ class Deck:
     lines: tuple[DeckLine, ...]
     options: dict[str, float | str]
     warnings: tuple[str, ...]
+    bodies: dict[int, DeckBody] = field(default_factory=dict)
+
+    def point_position(self, point_id: int) -> tuple[float, float, float]:
+        """Global position [m] of a point at the deck's initial poses (body
+        points transformed by their body's X0..y0)."""
+        p = self.points[point_id]
+        if p.body is None:
+            return p.position
+        x, y, z = body_point_positions(self.bodies[p.body].pose(), p.position)
+        return (float(x), float(y), float(z))
 
 
 # ----------------------------------------------------------------------------
@@ -275,7 +344,8 @@ def options_with_defaults(deck: Deck) -> dict[str, float | str | None]:
 
     * ``WtrDpth`` [m]: if the deck does not give it, MoorDyn starts from 0 and
       deepens the seabed to the lowest point, so the default is
-      ``max(0, -min(z of all points))``.
+      ``max(0, -min(z of all points))`` (body points at their global
+      position, :meth:`Deck.point_position`).
     * ``dtM`` [s]: if not given it is ``None`` - MoorDyn-C then derives the step
       from ``CFL`` (its nominal default is FLT_MAX).
 
@@ -286,7 +356,7 @@ def options_with_defaults(deck: Deck) -> dict[str, float | str | None]:
     """
     out: dict[str, float | str | None] = dict(MOORDYN_DEFAULTS)
     if "WtrDpth" not in deck.options:
-        zs = [p.position[2] for p in deck.points.values()]
+        zs = [deck.point_position(pid)[2] for pid in deck.points]
         out["WtrDpth"] = max(0.0, -min(zs)) if zs else 0.0
     out.update(deck.options)
     return out
@@ -665,17 +735,25 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
             f"{what}: Attachment = {word_tok!r}: free points are not supported yet; "
             "expected Fixed/Anchor or Coupled/Vessel",
         )
-    elif word in ("BODY", "TURBINE"):
+    elif word == "BODY":
+        if not re.fullmatch(r"\d+", rest) or int(rest) == 0:
+            raise ctx.error(
+                row.lineno,
+                f"{what}: Attachment = {word_tok!r}: expected Body<n> with n the id of a BODIES row "
+                "(1, 2, ...), e.g. Body1",
+            )
+        attachment = "body"
+    elif word == "TURBINE":
         raise ctx.error(
             row.lineno,
-            f"{what}: Attachment = {word_tok!r}: points attached to bodies/turbines "
-            "(body-relative coordinates) are not supported yet; expected Fixed/Anchor or Coupled/Vessel",
+            f"{what}: Attachment = {word_tok!r}: points attached to turbines are not supported yet; "
+            "expected Fixed/Anchor, Coupled/Vessel or Body<n>",
         )
     else:
         raise ctx.error(
             row.lineno,
             f"{what}: Attachment = {word_tok!r} is not a known point type; expected one of "
-            "Fixed, Anchor, Coupled, Vessel (Free/Connect and Body# are not supported yet)",
+            "Fixed, Anchor, Coupled, Vessel, Body<n> (Free/Connect are not supported yet)",
         )
 
     x = _number(ctx, row, 2, what, "X", "m")
@@ -708,6 +786,104 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
         cda=cda,
         ca=ca,
         source_line=row.lineno,
+        body=int(rest) if attachment == "body" else None,
+    )
+
+
+# ----------------------------------------------------------------------------
+# BODIES
+# ----------------------------------------------------------------------------
+
+_BODY_COLUMNS = ("ID", "Attachment", "X0", "Y0", "Z0", "r0", "p0", "y0", "Mass", "CG", "I", "Volume", "CdA", "Ca")
+
+_BODY_KINDS: dict[str, str] = {
+    **{w: "fixed" for w in ("FIXED", "FIX", "ANCHOR")},
+    **{w: "coupled" for w in ("COUPLED", "CPLD", "VESSEL", "VES")},
+    **{w: "coupled_pinned" for w in ("COUPLEDPINNED", "CPLDPIN", "VESSELPINNED", "VESPIN")},
+    "FREE": "free",
+}
+
+
+def _pipe_numbers(
+    ctx: _Context, row: _Row, index: int, what: str, field: str, unit: str, counts: tuple[int, ...],
+    constraint: str, meaning: str,
+) -> tuple[float, ...]:
+    """Parse ``a|b|c`` (no spaces) with a count in ``counts``; each part a finite number."""
+    token = row.tokens[index]
+    parts = token.split("|")
+    expected = " or ".join(str(c) for c in counts)
+    if len(parts) not in counts:
+        raise ctx.error(
+            row.lineno,
+            f"{what}: {field} = {token!r} has {len(parts)} value(s); expected {expected} numbers "
+            f"separated by '|' without spaces ({meaning}) in {unit}",
+        )
+    values = []
+    for part in parts:
+        if _NONFINITE_RE.match(part) or (_FLOAT_RE.match(part) and not math.isfinite(float(part))):
+            raise ctx.error(row.lineno, f"{what}: {field} = {token!r}: {part} {unit} must be a finite number")
+        if not _FLOAT_RE.match(part):
+            raise ctx.error(
+                row.lineno,
+                f"{what}: {field} = {token!r}: {part!r} is not a number; expected {expected} numbers "
+                f"separated by '|' ({meaning}) in {unit}",
+            )
+        value = float(part)
+        _check_constraint(ctx, row.lineno, what, field, token if len(parts) == 1 else f"{token!r}: {part}",
+                          unit, value, constraint)
+        values.append(value)
+    return tuple(values)
+
+
+def _parse_body(ctx: _Context, row: _Row) -> DeckBody:
+    what = "BODIES row"
+    _require_columns(ctx, row, what, _BODY_COLUMNS)
+    t = row.tokens
+    bid = _integer(ctx, row, 0, what, "ID")
+    what = f"BODIES id {bid}"
+    kind = _BODY_KINDS.get(t[1].upper())
+    if kind is None:
+        raise ctx.error(
+            row.lineno,
+            f"{what}: Attachment = {t[1]!r} is not a known body type; expected one of Fixed, "
+            "Coupled (Vessel), Free, CoupledPinned (VesselPinned)",
+        )
+    position = tuple(_number(ctx, row, i, what, f, "m") for i, f in ((2, "X0"), (3, "Y0"), (4, "Z0")))
+    orientation = tuple(_number(ctx, row, i, what, f, "deg") for i, f in ((5, "r0"), (6, "p0"), (7, "y0")))
+    mass = _number(ctx, row, 8, what, "Mass", "kg", "nonneg")
+    cg = _pipe_numbers(ctx, row, 9, what, "CG", "m", (1, 3), "any", "z, or x|y|z")
+    if len(cg) == 1:
+        cg = (0.0, 0.0, cg[0])
+    inertia = _pipe_numbers(ctx, row, 10, what, "I", "kg-m^2", (1, 3), "nonneg", "Ixx=Iyy=Izz, or Ixx|Iyy|Izz")
+    if len(inertia) == 1:
+        inertia = inertia * 3
+    volume = _number(ctx, row, 11, what, "Volume", "m^3", "nonneg")
+    cda = _pipe_numbers(ctx, row, 12, what, "CdA", "m^2", (1, 2, 3, 6), "nonneg",
+                        "all six, translation|rotation, x|y|z, or one per degree of freedom")
+    if len(cda) == 1:
+        cda = cda * 6
+    elif len(cda) == 2:
+        cda = (cda[0],) * 3 + (cda[1],) * 3
+    elif len(cda) == 3:
+        cda = cda * 2
+    ca = _pipe_numbers(ctx, row, 13, what, "Ca", "[-]", (1, 3), "nonneg", "all three, or x|y|z")
+    if len(ca) == 1:
+        ca = ca * 3
+    if len(t) > len(_BODY_COLUMNS):
+        extra = t[len(_BODY_COLUMNS):]
+        ctx.warn(row.lineno, f"{what}: {len(extra)} extra column(s) ignored: {' '.join(extra)}")
+    return DeckBody(
+        id=bid,
+        attachment=kind,
+        position=position,  # type: ignore[arg-type]
+        orientation=orientation,  # type: ignore[arg-type]
+        mass=mass,
+        cg=cg,  # type: ignore[arg-type]
+        inertia=inertia,  # type: ignore[arg-type]
+        volume=volume,
+        cda=cda,  # type: ignore[arg-type]
+        ca=ca,  # type: ignore[arg-type]
+        source_line=row.lineno,
     )
 
 
@@ -733,8 +909,8 @@ def _parse_attachment_ref(ctx: _Context, row: _Row, index: int, what: str, field
     if _BODY_REF_RE.match(token):
         raise ctx.error(
             row.lineno,
-            f"{what}: {field} = {token!r}: lines attached directly to bodies are not supported yet; "
-            "expected a point id such as 1 or P1",
+            f"{what}: {field} = {token!r}: a line end names a point, not a body; add a POINTS row "
+            "with Attachment Body<n> and coordinates in the body's axes, and give its id (e.g. 3 or P3)",
         )
     raise ctx.error(
         row.lineno, f"{what}: {field} = {token!r} is not a point id; expected a point id such as 1 or P1"
@@ -892,7 +1068,6 @@ def _parse(text: str, ctx: _Context) -> Deck:
 
     # --- unsupported object sections
     for kind, what in (
-        ("BODIES", "bodies"),
         ("RODS", "rods"),
         ("FAILURE", "line failures"),
         ("EXTERNAL LOADS", "external loads"),
@@ -926,6 +1101,14 @@ def _parse(text: str, ctx: _Context) -> Deck:
             )
         line_types[lt.name] = lt
 
+    # --- BODIES
+    bodies: dict[int, DeckBody] = {}
+    sec = sections.get("BODIES")
+    if sec is not None:
+        parsed_bodies = [_parse_body(ctx, row) for row in sec.rows]
+        _check_ids_sequential(ctx, "BODIES", [(b.id, b.source_line) for b in parsed_bodies])
+        bodies = {b.id: b for b in parsed_bodies}
+
     # --- POINTS
     points: dict[int, DeckPoint] = {}
     sec = sections.get("POINTS")
@@ -935,20 +1118,38 @@ def _parse(text: str, ctx: _Context) -> Deck:
         point_items = [(p.id, p.source_line) for p in parsed]
         _check_ids_sequential(ctx, "POINTS", point_items)
         points = {p.id: p for p in parsed}
+    for p in points.values():
+        if p.body is not None and p.body not in bodies:
+            known = ", ".join(str(i) for i in bodies) or "none - no BODIES section rows"
+            raise ctx.error(
+                p.source_line,
+                f"POINTS id {p.id}: Attachment = 'Body{p.body}': no body with id {p.body} "
+                f"(known body ids: {known})",
+            )
+    for b in bodies.values():
+        if not any(p.body == b.id for p in points.values()):
+            ctx.warn(b.source_line, f"BODIES id {b.id}: no point is attached to this body")
+
+    def global_z(p: DeckPoint) -> float:
+        if p.body is None:
+            return p.position[2]
+        return float(body_point_positions(bodies[p.body].pose(), p.position)[2])
 
     depth = options.get("WtrDpth")
     if isinstance(depth, float):
         tol = 1e-6 * depth
         for p in points.values():
-            if p.position[2] < -depth - tol:
+            z = global_z(p)
+            if z < -depth - tol:
+                where = "" if p.body is None else f" (global z of a point of body {p.body} at its deck pose)"
                 raise ctx.error(
                     p.source_line,
-                    f"POINTS id {p.id}: Z = {p.position[2]!r} m is below the seabed at "
+                    f"POINTS id {p.id}: Z = {z!r} m{where} is below the seabed at "
                     f"z = -{depth!r} m (WtrDpth = {depth!r} m, line {option_lines['WtrDpth']}); "
                     "expected Z >= -WtrDpth",
                 )
     elif points:
-        lowest = min(p.position[2] for p in points.values())
+        lowest = min(global_z(p) for p in points.values())
         if lowest < 0:
             ctx.warn(
                 None,
@@ -1002,6 +1203,7 @@ def _parse(text: str, ctx: _Context) -> Deck:
         lines=tuple(lines),
         options=options,
         warnings=tuple(ctx.warnings),
+        bodies=bodies,
     )
 
 

@@ -1,4 +1,4 @@
-"""Reader for prescribed-motion CSV files (the path of each coupled point).
+"""Reader for prescribed-motion CSV files (the path of each coupled point and body).
 
 Format: a comma-separated file with one header row, then one row per time::
 
@@ -9,7 +9,15 @@ Format: a comma-separated file with one header row, then one row per time::
 * ``t`` [s]: strictly increasing, finite, at least two rows;
 * for each requested point id ``<id>``: ``P<id>_x``, ``P<id>_y``, ``P<id>_z`` [m]
   (required) and optionally ``P<id>_vx``, ``P<id>_vy``, ``P<id>_vz`` [m/s]
-  (all three or none).
+  (all three or none);
+* for each requested (coupled) body id ``<id>``: its 6-DOF pose
+  ``B<id>_x``, ``B<id>_y``, ``B<id>_z`` [m] (reference point) and
+  ``B<id>_roll``, ``B<id>_pitch``, ``B<id>_yaw`` [rad] (MoorDyn's angles, see
+  :mod:`moorjax.io.frames`; radians as in MoorDyn's coupling calls, while a deck
+  gives its r0, p0, y0 in degrees), and optionally all six rates
+  ``B<id>_vx``, ``B<id>_vy``, ``B<id>_vz`` [m/s], ``B<id>_vroll``,
+  ``B<id>_vpitch``, ``B<id>_vyaw`` [rad/s] (time derivatives of those
+  coordinates).
 
 Column names are matched case-insensitively and may be padded with spaces;
 blank lines and lines starting with ``#`` are skipped.  Columns that are not
@@ -28,7 +36,7 @@ import math
 import re
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -37,13 +45,14 @@ from .errors import InputError, InputWarning
 
 __all__ = ["Motion", "read_motion"]
 
+_POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 _FLOAT_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
 _NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)\Z", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
 class Motion:
-    """Prescribed motion of coupled points, sampled at times ``t``.
+    """Prescribed motion of coupled points and bodies, sampled at times ``t``.
 
     Arrays are float64 and read-only.
 
@@ -53,12 +62,17 @@ class Motion:
         velocities: point id -> (nt, 3) velocities [m/s], or ``None`` when the
             file has no velocity columns for that point.
         path: the file read.
+        body_poses: body id -> (nt, 6) poses x, y, z [m], roll, pitch, yaw [rad].
+        body_rates: body id -> (nt, 6) their time derivatives [m/s, rad/s], or
+            ``None`` when the file has no rate columns for that body.
     """
 
     t: np.ndarray
     positions: dict[int, np.ndarray]
     velocities: dict[int, np.ndarray | None]
     path: str
+    body_poses: dict[int, np.ndarray] = field(default_factory=dict)
+    body_rates: dict[int, np.ndarray | None] = field(default_factory=dict)
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -67,31 +81,39 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     return a
 
 
-def read_motion(path, point_ids: Sequence[int]) -> Motion:
-    """Read a prescribed-motion CSV for the given coupled point ids.
+def _ids(values, what: str) -> list[int]:
+    ids: list[int] = []
+    for i in values:
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)):
+            raise TypeError(f"{what} must be integers, got {i!r}")
+        if int(i) not in ids:
+            ids.append(int(i))
+    return ids
+
+
+def read_motion(path, point_ids: Sequence[int], body_ids: Sequence[int] = ()) -> Motion:
+    """Read a prescribed-motion CSV for the given coupled point and body ids.
 
     Args:
         path: the CSV file (``str`` or :class:`os.PathLike`).
         point_ids: ids of the points whose motion is needed (e.g. the coupled
             points of a deck); duplicates are ignored.
+        body_ids: ids of the bodies whose 6-DOF motion is needed (the coupled
+            bodies of a deck); duplicates are ignored.
 
     Returns:
         The :class:`Motion`.
 
     Raises:
-        InputError: empty file, missing ``t`` or point columns (the message
-            lists what is missing and what was found), partial velocity
-            triplets, duplicated columns, rows with the wrong number of cells,
+        InputError: empty file, missing ``t``, point or body columns (the
+            message lists what is missing and what was found), partial velocity
+            triplets or body-rate sextets, duplicated columns, rows with the wrong number of cells,
             non-numeric or non-finite cells, fewer than two rows, or times that
             are not strictly increasing.
         OSError: the file cannot be read.
     """
-    ids: list[int] = []
-    for pid in point_ids:
-        if isinstance(pid, bool) or not isinstance(pid, (int, np.integer)):
-            raise TypeError(f"point_ids must be integers, got {pid!r}")
-        if int(pid) not in ids:
-            ids.append(int(pid))
+    ids = _ids(point_ids, "point_ids")
+    bids = _ids(body_ids, "body_ids")
 
     name = str(path)
     text = Path(path).read_text(encoding="utf-8-sig", errors="replace")
@@ -149,11 +171,42 @@ def read_motion(path, point_ids: Sequence[int]) -> Motion:
             f"{name}:{header_line}: missing column(s) {', '.join(missing)} [m] for point id(s) "
             f"{', '.join(str(i) for i in ids)}; found columns: {found}"
         )
+
+    pose_cols: dict[int, list[int]] = {}
+    rate_cols: dict[int, list[int] | None] = {}
+    missing = []
+    for bid in bids:
+        names = [f"B{bid}_{c}" for c in _POSE]
+        lacking = [n for n in names if n.lower() not in columns]
+        missing.extend(lacking)
+        if not lacking:
+            pose_cols[bid] = [columns[n.lower()] for n in names]
+        wanted.extend(names)
+        rnames = [f"B{bid}_v{c}" for c in _POSE]
+        present = [n for n in rnames if n.lower() in columns]
+        if present and len(present) < 6:
+            absent = [n for n in rnames if n.lower() not in columns]
+            raise InputError(
+                f"{name}:{header_line}: body {bid} has rate column(s) {', '.join(present)} "
+                f"but not {', '.join(absent)}; give all six of {', '.join(rnames)} "
+                "[m/s, rad/s] or none"
+            )
+        rate_cols[bid] = [columns[n.lower()] for n in rnames] if present else None
+        wanted.extend(present)
+    if missing:
+        raise InputError(
+            f"{name}:{header_line}: missing column(s) {', '.join(missing)} for body id(s) "
+            f"{', '.join(str(i) for i in bids)} (x, y, z [m] of the reference point; roll, pitch, "
+            f"yaw [rad]); found columns: {found}"
+        )
+
     extra = [col for col in header if col.lower() not in {w.lower() for w in wanted}]
     if extra:
+        requested = f"requested point ids: {', '.join(str(i) for i in ids) or 'none'}"
+        if bids:
+            requested += f"; body ids: {', '.join(str(i) for i in bids)}"
         warnings.warn(
-            f"{name}:{header_line}: column(s) {', '.join(extra)} not used "
-            f"(requested point ids: {', '.join(str(i) for i in ids) or 'none'})",
+            f"{name}:{header_line}: column(s) {', '.join(extra)} not used ({requested})",
             InputWarning,
             stacklevel=2,
         )
@@ -195,4 +248,7 @@ def read_motion(path, point_ids: Sequence[int]) -> Motion:
 
     positions = {pid: _frozen(data[:, pos_cols[pid]]) for pid in ids}
     velocities = {pid: (None if vel_cols[pid] is None else _frozen(data[:, vel_cols[pid]])) for pid in ids}
-    return Motion(t=_frozen(t), positions=positions, velocities=velocities, path=name)
+    body_poses = {bid: _frozen(data[:, pose_cols[bid]]) for bid in bids}
+    body_rates = {bid: (None if rate_cols[bid] is None else _frozen(data[:, rate_cols[bid]])) for bid in bids}
+    return Motion(t=_frozen(t), positions=positions, velocities=velocities, path=name,
+                  body_poses=body_poses, body_rates=body_rates)
