@@ -42,6 +42,7 @@ Loads
 
 from __future__ import annotations
 
+import functools
 from importlib import resources
 
 import numpy as np
@@ -56,7 +57,7 @@ LENGTH, WIDTH, HEIGHT, DRAFT = 45.0, 45.0, 27.5, 20.0
 MASS = 41_512e3  # [kg]
 INERTIA = (4.5316e10, 4.2748e10, 4.8877e10)  # [kg·m²]
 ZG = -DRAFT + HEIGHT / 2  # centre of gravity [m]
-DEPTH, RHO, G = 80.0, 1025.0, 9.80665
+DEPTH, RHO, G = 80.0, 1025.0, 9.81  # g as in the hydrodynamic coefficients
 LINE_LENGTH = 110.0
 PRETENSION_H = 20e3  # horizontal fairlead tension at rest [N]
 HEADING = np.radians(30.0)  # 60° from the sway axis
@@ -75,6 +76,16 @@ HYDRO_FILE = "wu_box_hydro.npz"
 
 def hydro_path() -> str:
     return str(resources.files("moorjax.examples").joinpath("data", HYDRO_FILE))
+
+
+@functools.lru_cache(maxsize=1)
+def _default_coeffs():
+    return load_hydro(hydro_path())
+
+
+@functools.lru_cache(maxsize=4)
+def _default_radiation(order):
+    return fit_radiation(_default_coeffs(), order=order)[0]
 
 
 def line_type(material: str) -> mj.LineType:
@@ -145,7 +156,7 @@ def environment(current: bool = True, current_speed: float = CURRENT, heading: f
 def body(*, hs=HS, tz=TZ, wind=WIND, current=CURRENT, heading=HEADING, seed=0,
          n_components=100, radiation=True, waves=True, drift=True, coeffs=None, radiation_order=6):
     """The box as a :class:`RigidBody` with its environmental loads."""
-    coeffs = load_hydro(hydro_path()) if coeffs is None else coeffs
+    coeffs = _default_coeffs() if coeffs is None else coeffs
     loads = []
     steady = 0.0
     if wind > 0:
@@ -157,7 +168,12 @@ def body(*, hs=HS, tz=TZ, wind=WIND, current=CURRENT, heading=HEADING, seed=0,
     if waves and hs > 0:
         loads.append(wave_loads(coeffs, hs, tz, heading, n_components=n_components, seed=seed,
                                 drift=drift))
-    rad = fit_radiation(coeffs, order=radiation_order)[0] if radiation else None
+    if not radiation:
+        rad = None
+    elif coeffs is _default_coeffs():
+        rad = _default_radiation(radiation_order)
+    else:
+        rad = fit_radiation(coeffs, order=radiation_order)[0]
     return RigidBody(MASS, INERTIA, added_mass=coeffs.added_mass_inf, hydrostatic=coeffs.hydrostatic,
                      origin=(0.0, 0.0, ZG), radiation=rad, loads=tuple(loads),
                      half_size=(LENGTH / 2, WIDTH / 2, HEIGHT / 2), label="box")
