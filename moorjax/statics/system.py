@@ -54,16 +54,23 @@ class SystemStatics(eqx.Module):
         return tuple(b.rest_state(p) for b, p in zip(scene.bodies, self.poses))
 
 
-def _line_statics_at(scene, poses, t):
+def _line_statics_at(scene, poses, t, inits=None):
     vel = [jnp.zeros(6)] * len(scene.bodies)
     lines = attach(scene.lines, scene.bodies, list(poses), vel)
-    return tuple(solve_line_statics(ln, scene.env, t, throw=False) for ln in lines)
+    inits = (None,) * len(lines) if inits is None else inits
+    return tuple(solve_line_statics(ln, scene.env, t, init=i, throw=False)
+                 for ln, i in zip(lines, inits))
 
 
-def mooring_wrench(scene, poses, t=0.0) -> Array:
-    """(n_bodies, 6) static wrench of the lines on each body at poses (n_bodies, 6)."""
+def mooring_wrench(scene, poses, t=0.0, inits=None) -> Array:
+    """(n_bodies, 6) static wrench of the lines on each body at poses (n_bodies, 6).
+
+    ``inits``: optional line states to start each line's static solve from (a
+    nearby solution: continuation is more robust than the catenary guess for
+    lines resting on the seabed).
+    """
     poses = jnp.asarray(poses, dtype=float).reshape(len(scene.bodies), 6)
-    st = _line_statics_at(scene, poses, t)
+    st = _line_statics_at(scene, poses, t, inits)
     ends = [(s.force_a, s.force_b) for s in st]
     return jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses), ends))
 
@@ -91,9 +98,9 @@ def body_forces(scene, poses, t=0.0, loads=True) -> Array:
 
 
 @eqx.filter_jit
-def _newton_parts(scene, poses, t, loads):
+def _newton_parts(scene, poses, t, loads, inits):
     def imbalance(p):
-        return body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t)
+        return body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits)
 
     g, jvp_fn = jax.linearize(imbalance, poses)
     jac = jax.vmap(jvp_fn)(jnp.eye(poses.size).reshape((poses.size,) + poses.shape))
@@ -126,13 +133,14 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
     scale = None
     converged = False
     it = 0
+    inits = tuple(s.state() for s in _line_statics_at(scene, poses, t))
     for it in range(1, max_iterations + 1):
-        g, jac = _newton_parts(scene, poses, t, bool(loads))
+        g, jac = _newton_parts(scene, poses, t, bool(loads), inits)
         g_np = np.asarray(g)
         if not np.all(np.isfinite(g_np)) or not np.all(np.isfinite(np.asarray(jac))):
             break
         if scale is None:
-            st = _line_statics_at(scene, poses, t)
+            st = _line_statics_at(scene, poses, t, inits)
             tens = max(float(jnp.max(jnp.abs(s.tensions))) for s in st)
             scale = max(tens, float(np.max(np.abs(g_np))), 1.0)
         # moments are compared on the same scale times a unit lever arm
@@ -143,8 +151,11 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         # damp large rotations and translations (the line statics must stay reachable)
         big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
         poses = poses + jnp.asarray(step / big)
-    st = _line_statics_at(scene, poses, t)
-    wrench = mooring_wrench(scene, poses, t)
+        new = _line_statics_at(scene, poses, t, inits)
+        if all(bool(x.converged) for x in new):
+            inits = tuple(x.state() for x in new)
+    st = _line_statics_at(scene, poses, t, inits)
+    wrench = mooring_wrench(scene, poses, t, inits)
     residual = body_forces(scene, poses, t, loads) + wrench
     lines_ok = all(bool(s.converged) for s in st)
     out = SystemStatics(poses, st, wrench, residual, it, bool(converged and lines_ok))
@@ -182,17 +193,39 @@ def offset_curve(scene, offsets, dof: int = 0, body: int = 0, t=0.0) -> Array:
 
     The other degrees of freedom stay at zero (the paper's static offset test).
     Returned relative to the force at zero offset, so it is the restoring force
-    the moorings add [N or N·m].
+    the moorings add [N or N·m]. The offsets are visited from zero outwards, each
+    line's static solve starting from its solution at the previous offset
+    (continuation); a line whose solve fails raises ``RuntimeError`` naming it.
     """
     nb = len(scene.bodies)
-    offsets = jnp.asarray(offsets, dtype=float)
+    offsets = np.asarray(offsets, dtype=float)
 
-    def at(x):
+    def solve(x, inits):
         p = jnp.zeros((nb, 6)).at[body, dof].set(x)
-        return -mooring_wrench(scene, p, t)[body, dof]
+        st = _line_statics_at(scene, p, t, inits)
+        bad = [scene.lines[i].label for i, s in enumerate(st) if not bool(s.converged)]
+        if bad:
+            raise RuntimeError(f"offset curve: static solve of line(s) {', '.join(bad)} failed at "
+                               f"offset {x:g} of dof {dof}")
+        ends = [(s.force_a, s.force_b) for s in st]
+        f = -jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))[body, dof]
+        return float(f), tuple(s.state() for s in st)
 
-    f0 = at(0.0)
-    return jnp.stack([at(x) for x in offsets]) - f0
+    f0, base = solve(0.0, None)
+    out = np.empty(offsets.shape)
+    for sign in (1.0, -1.0):
+        idx = [i for i in np.argsort(np.abs(offsets)) if np.sign(offsets[i]) in (sign, 0.0)]
+        inits, last = base, 0.0
+        for i in idx:
+            x = offsets[i]
+            # small continuation steps (at most 0.25 m or 0.01 rad) between samples
+            n_sub = int(np.ceil(abs(x - last) / (0.25 if dof < 3 else 0.01)))
+            for k in range(1, n_sub):
+                _, inits = solve(last + (x - last) * k / n_sub, inits)
+            out[i], inits = solve(x, inits)
+            out[i] -= f0
+            last = x
+    return jnp.asarray(out)
 
 
 __all__ = ["SystemStatics", "LineStatics", "solve_system_statics", "mooring_stiffness",
