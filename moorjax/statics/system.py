@@ -150,9 +150,23 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         step = np.linalg.solve(np.asarray(jac), -g_np.ravel()).reshape(nb, 6)
         # damp large rotations and translations (the line statics must stay reachable)
         big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
-        poses = poses + jnp.asarray(step / big)
-        new = _line_statics_at(scene, poses, t, inits)
-        if all(bool(x.converged) for x in new):
+        # backtracking: seabed contact makes the imbalance kinked, so a full
+        # Newton step can overshoot and cycle
+        step = step / big
+        size = np.max(np.abs(g_np))
+        for _ in range(6):
+            trial = poses + jnp.asarray(step)
+            new = _line_statics_at(scene, trial, t, inits)
+            ok = all(bool(x.converged) for x in new)
+            if ok:
+                ends = [(x.force_a, x.force_b) for x in new]
+                w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(trial), ends))
+                g_trial = np.asarray(body_forces(scene, trial, t, loads) + w)
+                if np.max(np.abs(g_trial)) < size:
+                    break
+            step = 0.5 * step
+        poses = trial
+        if ok:
             inits = tuple(x.state() for x in new)
     st = _line_statics_at(scene, poses, t, inits)
     wrench = mooring_wrench(scene, poses, t, inits)
