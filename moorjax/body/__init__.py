@@ -19,3 +19,4 @@ from .waves import WaveLoads as WaveLoads
 from .waves import pm_spectrum as pm_spectrum
 from .waves import wave_components as wave_components
 from .waves import wave_loads as wave_loads
+from .point import ConnectionPoint as ConnectionPoint
