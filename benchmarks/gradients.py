@@ -21,16 +21,15 @@ For the reference catenary (case A: ``oc3_catenary``, fairlead x = −5.2 +
 Each function is compiled first (``compile_s``), then run ``--repeats`` times
 (min wall time reported, ``run_s``). Memory: the XLA buffers of the compiled
 function (``temp``: scratch, ``total``: arguments + outputs + scratch), from
-``compiled.memory_analysis()``.
+``compiled.memory_analysis()``; and the process's peak resident set size after
+each N (``peak_rss_MB``, cumulative over the run: it includes the larger of all
+functions compiled so far).
 
-    python benchmarks/gradients.py [--quick] [--segments 20 80] [--duration 60] [--json out.json]
-    python benchmarks/gradients.py --case-a-fit [--fit-segments 20]
+    PYTHONPATH=. python benchmarks/gradients.py [--quick] [--segments 20 80] [--duration 60]
+        [--repeats 3] [--no-binomial] [--dense-up-to 20] [--json out.json]
 
-``--case-a-fit`` is the real-data check of the identification: ``moorjax fit`` of
-case A's Cd_normal to the converged MoorDyn history (``ref_A.csv``: |F| on the
-fairlead, as ``L1_tension_b``), started from half the deck's value (1.6), over
-the 60 s of ``motion_A.csv``. The reference data are looked for in
-``$MOORJAX_REFERENCE_DIR`` (default ``../shared/reference``).
+The real-data check of the identification (case A's Cd_normal fitted to
+MoorDyn's history) is ``benchmarks/fit_case_a.py``.
 
 Target: gradient/forward ≤ 5. Timings come from a 2-core machine shared with
 other work (±30 %); compare the ratios within one run.
@@ -41,13 +40,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import sys
 import time
 
 import diffrax
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -159,54 +158,8 @@ def run_case(n, duration, dt, repeats, with_binomial, with_dense):
         row[f"{name}_s"] = var.best
         row[f"{name}_mem"] = var.mem
         row[f"{name}_ratio"] = var.best / fwd
+    row["peak_rss_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return row
-
-
-def reference_dir():
-    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    return os.environ.get("MOORJAX_REFERENCE_DIR", os.path.join(here, "..", "shared", "reference"))
-
-
-def case_a_fit(segments, steps=30):
-    """Fit Cd_normal of case A to MoorDyn's N=160 history through the ``moorjax fit`` CLI."""
-    import tempfile
-
-    from moorjax.identify.cli import add_parser
-
-    ref = reference_dir()
-    paths = {k: os.path.join(ref, f) for k, f in
-             (("deck", "case_A.dat"), ("motion", "motion_A.csv"), ("ref", "ref_A.csv"))}
-    missing = [p for p in paths.values() if not os.path.exists(p)]
-    if missing:
-        print(f"case A check skipped: missing {', '.join(missing)}")
-        return None
-    data = np.loadtxt(paths["ref"], delimiter=",", skiprows=1)
-    with tempfile.TemporaryDirectory() as tmp:
-        target = os.path.join(tmp, "target_A.csv")
-        np.savetxt(target, np.column_stack([data[:, 0], np.linalg.norm(data[:, 3:6], axis=1)]),
-                   delimiter=",", header="t,L1_tension_b", comments="", fmt="%.6f")
-        out = os.path.join(tmp, "fit_A.json")
-        parser = argparse.ArgumentParser(prog="moorjax")
-        add_parser(parser.add_subparsers(dest="command"))
-        args = parser.parse_args([
-            "fit", paths["deck"], "--motion", paths["motion"], "--target", target,
-            "--params", "Cd_normal", "--start", "Cd_normal=0.8", "--segments", str(segments),
-            "--steps", str(steps), "--out", out,
-        ])
-        t0 = time.perf_counter()
-        args.func(args)
-        wall = time.perf_counter() - t0
-        with open(out) as f:
-            res = json.load(f)
-    p = res["params"]["Cd_normal"]
-    deck_cd = 1.6
-    print(f"case A, N={segments}: Cd_normal {p['initial']:.4g} -> {p['fitted']:.4f} "
-          f"(deck {deck_cd}: {100 * (p['fitted'] / deck_cd - 1):+.2f} %, GN std {p['std']:.2g}); "
-          f"loss {res['initial_loss']:.4g} -> {res['final_loss']:.4g}, {res['iterations']} steps, "
-          f"{res['evaluations']} evaluations, {wall:.0f} s ({res['status']})")
-    return dict(segments=segments, fitted=p["fitted"], initial=p["initial"], std=p["std"],
-                rel_to_deck=p["fitted"] / deck_cd - 1, final_loss=res["final_loss"],
-                initial_loss=res["initial_loss"], iterations=res["iterations"], wall_s=wall)
 
 
 def main(argv=None):
@@ -221,16 +174,7 @@ def main(argv=None):
                    help="also time diffrax's default dense implicit-function solve for N <= this "
                         "(200x a forward run at N = 80)")
     p.add_argument("--json", metavar="PATH", help="write the figures to this JSON file")
-    p.add_argument("--case-a-fit", action="store_true",
-                   help="only the real-data check: fit case A's Cd_normal to MoorDyn's history")
-    p.add_argument("--fit-segments", type=int, default=20, help="segments of the case A fit")
     a = p.parse_args(argv)
-    if a.case_a_fit:
-        row = case_a_fit(a.fit_segments)
-        if a.json and row is not None:
-            with open(a.json, "w") as f:
-                json.dump(row, f, indent=2)
-        return 0
     if a.quick:
         a.segments, a.duration = [20], 20.0
     rows = []
@@ -247,6 +191,12 @@ def main(argv=None):
                 parts.append(f"{label} {row[k + '_s']:.2f} s = {row[k + '_ratio']:.2f}x "
                              f"[temp {mem(k)}]")
         print(f"N={n:3d} {a.duration:g} s ({row['steps']} steps): " + " | ".join(parts), flush=True)
+        print("      compile [s]: " + ", ".join(f"{k} {row[k + '_compile_s']:.1f}" for k in
+                                             ("forward", *labels) if f"{k}_s" in row)
+              + "; total XLA memory [MB]: " + ", ".join(
+                  f"{k} {row[k + '_mem'].get('total_MB', float('nan')):.1f}" for k in
+                  ("forward", *labels) if f"{k}_s" in row)
+              + f"; peak RSS so far {row['peak_rss_MB']:.0f} MB", flush=True)
     print("target: gradient <= 5x forward; timings: 2-core machine shared with other work (±30 %)")
     if a.json:
         with open(a.json, "w") as f:

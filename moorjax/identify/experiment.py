@@ -83,7 +83,8 @@ def experiment(scene, ts, tensions, *, channels=None, weights=None, window=None,
             ``channels``, or a mapping ``{"L1_tension_b": (k,) array, ...}``.
         channels: channel names (``L<id>_tension_a|b``) of the array's columns;
             default: end B of every line.
-        weights: optional non-negative weights, scalar, (m,) per channel or (k, m).
+        weights: optional non-negative weights: a scalar, (m,) per channel, (k, m),
+            or (k,) with a (k,) ``tensions`` array.
         window: optional ``(t_start, t_end)`` [s]: only samples inside count.
         scale: normalising tension [N] (default: std of the data in the window).
         name: a label used in messages.
@@ -99,12 +100,14 @@ def experiment(scene, ts, tensions, *, channels=None, weights=None, window=None,
             f"{name}: first measurement time {ts[0]} s must be after the start t0 = {t0} s "
             "(drop the rows at t <= t0: the static equilibrium there is not simulated)"
         )
+    one_channel = False
     if isinstance(tensions, dict):
         names = list(tensions)
         data = np.column_stack([np.asarray(tensions[c], dtype=float) for c in names])
     else:
         data = np.asarray(tensions, dtype=float)
-        if data.ndim == 1:
+        one_channel = data.ndim == 1
+        if one_channel:
             data = data[:, None]
         names = list(channels) if channels is not None else [f"L{ln.label}_tension_b" for ln in scene.lines]
     if data.ndim != 2 or data.shape[0] != ts.size or data.shape[1] != len(names):
@@ -121,8 +124,17 @@ def experiment(scene, ts, tensions, *, channels=None, weights=None, window=None,
         raise ValueError(f"{name}: measured {names[j]} at t = {ts[i]} s is {data[i, j]}; expected a finite tension [N]")
     _check_motion_span(scene, ts, name)
 
-    w = np.ones_like(data) if weights is None else np.broadcast_to(
-        np.asarray(weights, dtype=float), data.shape).copy()
+    w = np.ones_like(data) if weights is None else np.asarray(weights, dtype=float)
+    if weights is not None:
+        if one_channel and w.shape == (ts.size,):
+            w = w[:, None]  # one weight per sample of a 1-D history
+        try:
+            w = np.broadcast_to(w, data.shape).copy()
+        except ValueError:
+            raise ValueError(
+                f"{name}: weights have shape {w.shape}; expected a scalar, ({data.shape[1]},) "
+                f"per channel or {data.shape} (one per sample and channel)"
+            ) from None
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ValueError(f"{name}: weights must be finite and >= 0")
     if window is not None:

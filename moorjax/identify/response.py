@@ -41,18 +41,50 @@ derivative of the computed loss (an optimiser's line search then stalls), and th
 backward integration of a stiff line (axial waves, snap loads) needs steps as
 small as an explicit method's.
 
-Fixed or adaptive steps: with an adaptive controller diffrax stops gradients
-through the step-size choice, so the gradient is that of the solve *with its step
-sequence frozen* — correct: for a case-B-like line (N = 8, 4 s, tolerances
-1e-8) it agrees with a finite difference taken with the step sequence frozen
-(``diffrax.StepTo``) to 2e-5 and with the converged fixed-step gradient to
-0.3 %. But the loss itself is not smooth: a finite difference also sees the
-controller choose other steps and accept or reject differently, jumps of the
-order of the tolerance (1e-8 of a loss of 56 is 6e-7, while h·∂L/∂Cd is 4e-9
-for h = 1e-4) — central differences of the adaptive loss scatter by a factor of 20,
-and a line search would see the same noise. Identification therefore uses
-fixed steps (``dt``): the loss is then a smooth function of the parameters and
-its gradient matches central differences to < 1e-4 (``tests/test_gradients.py``).
+Why checkpointed reverse mode with fixed steps is the default:
+
+- *reverse mode*, because a fit needs the derivative of one scalar loss with
+  respect to every free parameter: one backward pass gives them all (and the
+  derivative with respect to every array of the scene, which is how
+  :mod:`~moorjax.identify.objective` serves any choice of free parameters from
+  one compilation); forward mode costs one pass per parameter;
+- *checkpointed* (``RecursiveCheckpointAdjoint``, discretise-then-optimise),
+  because its gradient is exactly that of the computed loss, so the loss values
+  and the gradients an optimiser sees are consistent (see ``BacksolveAdjoint``
+  above). The number of checkpoints is ``max_steps`` (2·⌈T/dt⌉ + 100: 12 100
+  for 60 s at dt = 0.01 s) when ``8·|y|·max_steps`` bytes fit in
+  :data:`CHECKPOINT_BYTES` (one line of up to ≈ 115 segments for 60 s at
+  dt = 0.01 s), so no step is recomputed; otherwise diffrax's default,
+  O(√max_steps) checkpoints with an online binomial (treeverse) schedule that
+  recomputes steps;
+- *fixed steps*, because with an adaptive controller the loss is not a smooth
+  function of the parameters. diffrax stops gradients through the step-size
+  choice (``lax.stop_gradient`` in ``PIDController``), so the adaptive-step
+  gradient is the exact gradient of the solve *with its step sequence frozen* —
+  but a finite difference, and a line search, also see the controller choose
+  other steps. Measured on the taut polyester line of ``tests/test_gradients.py``
+  (N = 8, 3 s, current, misfit to a history with other α, β, Cd), d(loss)/dCd_normal:
+
+  ============================================  ==================  ==================
+  relative difference to the AD gradient         rtol = atol = 1e-6  rtol = atol = 1e-8
+  ============================================  ==================  ==================
+  accepted (rejected) steps                      90 (2)              518 (27)
+  AD with that step sequence frozen (StepTo)     0 (identical)       0 (identical)
+  central FD, steps frozen, h/Cd = 1e-4 … 1e-6   1e-7 … 2e-6         2e-8 … 7e-7
+  central FD of the adaptive loss, h/Cd = 1e-3   7e-6                1.5e-3
+  … h/Cd = 1e-4, 1e-5, 1e-6                      8e-6, 1e-6, 7e-5    1.5e-3, 1.5e-2, 4e-2
+  AD, fixed steps dt = 0.01 s (Newton 1e-10)     6e-5                4e-6
+  ============================================  ==================  ==================
+
+  So the adaptive-step gradient is right (it is the frozen-step gradient and
+  agrees with the fixed-step one); what disagrees is the finite
+  difference of the adaptive loss, by an amount that depends on h, the
+  tolerance and where the controller's decisions flip (a first probe saw 15 %;
+  tighter tolerances do not help: more steps, more flips). An optimiser's line
+  search compares loss values and would see the same jumps. With fixed steps the
+  loss is a smooth function of the parameters and its gradient matches central
+  differences to < 1e-4 for every parameter (``tests/test_gradients.py``).
+  ``simulation(ts, dt=None)`` still gives adaptive steps for a single gradient.
 
 The fixed steps are *guarded*: a step whose implicit (very-chord Newton) solve
 fails is retried with a quarter of the size, and the steps grow back to ``dt``
