@@ -457,15 +457,7 @@ def test_taut_buoyant_regime(case, solved):
     [
         (380.0, False),  # chord 405 m > 400 m: taut, ~25 MN
         (340.0, True),  # 164 m on the seabed
-        pytest.param(
-            320.0,
-            True,  # 212 m on the seabed
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="moorjax bug: static solve returns NaN / converged=False for this ordinary "
-                "grounded chain (damped Newton stalls after 1 step, the optimistix polish diverges)",
-            ),
-        ),
+        (320.0, True),  # 212 m on the seabed (stalled the damped Newton before the energy descent)
         (300.0, True),  # 238 m on the seabed
     ],
 )
@@ -504,12 +496,6 @@ def test_far_seabed_does_not_change_solution(far_seabed):
     np.testing.assert_allclose(np.asarray(st2.positions), np.asarray(st.positions), atol=1e-6)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="moorjax bug: with any seabed in the environment the catenary start assumes the "
-    "lower end lies on it, so a suspended line far above the seabed starts from a grounded "
-    "profile and the damped Newton runs to max_steps (106 iterations instead of 4)",
-)
 def test_far_seabed_does_not_change_newton_cost(far_seabed):
     """The analytic-catenary start should be as good with a distant seabed as without."""
     st, st2 = far_seabed

@@ -114,6 +114,16 @@ def _seabed(lt, env, r, v, node_len):
     area = lt.diameter * node_len
     normal = jnp.where(touching, bed.stiffness * depth_pen * area, 0.0)
     vertical = normal - jnp.where(touching, bed.damping * v[:, 2] * area, 0.0)
+    # An end node held on the bed (an anchor) never sinks into it, so the spring gives
+    # it no support; where the adjacent node rests on the bed, the line's first half
+    # segment lies on the seabed and the bed carries its wet weight, as it does for
+    # the continuous line (the anchor then feels only the grounded tension, as in the
+    # analytic catenary), instead of the end node hanging that weight on the anchor.
+    on_bed = depth_pen[jnp.array([0, -1])] > -1e-6 * env.depth
+    neighbour_rests = depth_pen[jnp.array([1, -2])] > 0
+    share = jnp.maximum(lt.wet_weight(env.rho, env.g), 0.0) * node_len[jnp.array([0, -1])]
+    support = jnp.where(on_bed & neighbour_rests, share, 0.0)
+    vertical = vertical.at[jnp.array([0, -1])].add(support)
     force = jnp.zeros_like(r).at[:, 2].set(vertical)
     if bed.friction is not None:
         fr = bed.friction

@@ -1,12 +1,16 @@
-"""Static equilibrium of a finite-element line (Newton with optimistix).
+"""Static equilibrium of a finite-element line (energy descent, Newton polish).
 
 The unknowns are the free-node positions; the residual is the element's nodal
 force at rest (elastic, weight/buoyancy, seabed contact and — when the scene has
-one — the drag of the current). Newton starts from the analytic catenary profile
-(or the chord when no catenary exists), and its Jacobian is assembled from 9
-coloured JVPs and solved block-tridiagonally (O(n)). Gradients of the solution
-use the implicit function theorem (optimistix's ImplicitAdjoint), never unrolled
-iterations.
+one — the drag of the current). The iteration starts from the analytic catenary
+profile (touchdown only where the lower end rests on the seabed; nodes under the
+bed lifted to their resting penetration; the chord when no catenary exists).
+Without a current these forces are minus the gradient of a convex energy, so a
+regularised Newton iteration with a line search on that energy converges from
+any start, through touchdown and slack kinks (``_descent``). Its Jacobian is
+assembled from 9 coloured JVPs and solved block-tridiagonally (O(n)). A final
+optimistix Newton attaches gradients by the implicit function theorem
+(ImplicitAdjoint), never unrolled iterations.
 
 Seabed friction does not act in statics (the node velocities are zero), as in
 MoorDyn; the analytic catenary does model it (``moorjax.statics.catenary``).
@@ -24,7 +28,6 @@ from jaxtyping import Array
 
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
-from ..model.axial import Bilateral
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
 
@@ -68,13 +71,23 @@ def _catenary_guess(line: Line, env, t):
     ra, rb = line.end_a.position(t), line.end_b.position(t)
     w = lt.wet_weight(env.rho, env.g)
     ea = lt.axial.nominal_ea()
-    on_seabed = env.seabed is not None
-    sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=on_seabed)
+    if env.seabed is None:
+        sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=False)
+    else:
+        # the analytic touchdown model needs the lower end on the seabed; a line whose
+        # ends are both above it starts from the free catenary, lifted onto the bed
+        lower_on_bed = jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
+        sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=lower_on_bed)
     s = line.segment_length * jnp.arange(1, line.n_segments)
     nodes = catenary_nodes(sol, ra, rb, s)
     ok = sol.converged & jnp.all(jnp.isfinite(nodes))
-    chord = line.straight_state(t).r
-    return jnp.where(ok, nodes, chord)
+    nodes = jnp.where(ok, nodes, line.straight_state(t).r)
+    if env.seabed is not None:
+        # nodes on (or under) the bed start at the static penetration of a resting node
+        sink = jnp.maximum(w, 0.0) / (env.seabed.stiffness * lt.diameter)
+        z = nodes[:, 2]
+        nodes = nodes.at[:, 2].set(jnp.where(z < -env.depth + sink, -env.depth - sink, z))
+    return nodes
 
 
 def initial_guess(line: Line, env, t=0.0) -> LineState:
@@ -97,40 +110,71 @@ def _residual(line, env, t):
     return fn
 
 
-_BACKTRACK = 2.0 ** -jnp.arange(12)
+def _force_scale(line, env, t):
+    """The force scale [N] of an iterate: its largest tension, at least one node's weight."""
+    weight = jnp.abs(line.line_type.wet_weight(env.rho, env.g)) * line.segment_length
+
+    def scale(r_free):
+        r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
+        tension = line.element.segment_tensions(line, r, jnp.zeros_like(r))
+        return jnp.maximum(jnp.max(jnp.abs(tension)), weight)
+
+    return scale
 
 
-def _damped_newton(fn, y0, atol, rtol, max_steps):
-    """Newton with backtracking line search on the max-norm of the residual.
+_ALPHAS = 2.0 ** -jnp.arange(16)
 
-    The Jacobian band comes from coloured JVPs (O(n)); trial step lengths 1, ½, …
-    are evaluated together (vmap) and the first that reduces the residual wins.
-    Stops when the step is below ``atol + rtol·|y|``. Returns (y, iterations).
+
+def _descent(fn, y0, tol, max_steps, soft_length):
+    """Regularised Newton with an exact line search on the static energy.
+
+    Without a current the static forces are the negative gradient of a convex
+    energy (a tension-only axial law with nondecreasing tension, gravity, the
+    one-sided seabed spring), so every step is a descent step of that energy:
+    the direction solves (μI − J)·Δy = f with the block-tridiagonal band of J
+    (coloured JVPs, O(n)), μ = max|f|/soft_length keeps it defined where J is
+    singular (slack or unloaded directions move at most ~soft_length per step),
+    and the step length is where the energy stops decreasing along Δy: the sign
+    change of g(α) = −f(y + αΔy)·Δy, bracketed on α = 1, ½, … (vmapped) and
+    interpolated. Touchdown and slack kinks only make g piecewise smooth, so the
+    iteration cannot stall on them. Stops when max|f| ≤ tol(y). Returns (y, iterations).
     """
-    def norm(f):
-        return jnp.max(jnp.abs(f))
+    eye = jnp.eye(3)
 
     def cond(c):
-        _, it, _, done = c
+        _, _, it, done = c
         return (it < max_steps) & jnp.invert(done)
 
     def body(c):
-        y, it, fy, _ = c
+        y, fy, it, _ = c
         _, lin = jax.linearize(lambda z: fn(z, None), y)
         lower, diag, upper, _, _ = band_of(lin, jax.ShapeDtypeStruct(y.shape, y.dtype))
-        dx = btd.solve(btd.factor(lower, diag, upper), fy)
-        trial = jax.vmap(lambda a: fn(y - a * dx, None))(_BACKTRACK)
-        tn = jax.vmap(norm)(trial)
-        good = jnp.isfinite(tn) & (tn < (1 - 1e-4 * _BACKTRACK) * norm(fy))
-        k = jnp.where(jnp.any(good), jnp.argmax(good), _BACKTRACK.shape[0] - 1)
-        step = _BACKTRACK[k] * dx
-        y_new = y - step
-        small = jnp.all(jnp.abs(step) <= atol + rtol * jnp.abs(y_new))
-        stuck = jnp.invert(jnp.any(good))
-        return y_new, it + 1, trial[k], small | stuck | jnp.invert(jnp.all(jnp.isfinite(y_new)))
+        mu = jnp.max(jnp.abs(fy)) / soft_length
+        dy = btd.solve(btd.factor(-lower, mu * eye - diag, -upper), fy)
+        dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f
+        g = jax.vmap(lambda a: -jnp.sum(fn(y + a * dy, None) * dy))(_ALPHAS)
+        g = jnp.where(jnp.isfinite(g), g, jnp.inf)
+        down = g <= 0.0  # the energy still decreases at α
+        k = jnp.argmax(down)  # the largest such α (α decreases with k)
+        k = jnp.where(jnp.any(down), k, _ALPHAS.shape[0] - 1)
+        a_lo = _ALPHAS[k]
+        a_hi = _ALPHAS[jnp.maximum(k - 1, 0)]
+        g_lo, g_hi = g[k], g[jnp.maximum(k - 1, 0)]
+        # k = 0: the full step still descends, take it; otherwise interpolate the
+        # sign change of g between a_lo (g <= 0) and a_hi (g > 0)
+        frac = jnp.where(jnp.isfinite(g_hi) & (g_hi > g_lo), -g_lo / (g_hi - g_lo), 0.0)
+        alpha = jnp.where(k == 0, a_lo, a_lo + (a_hi - a_lo) * jnp.clip(frac, 0.0, 0.9))
+        y_new = y + alpha * dy
+        f_new = fn(y_new, None)
+        ok = jnp.all(jnp.isfinite(f_new))
+        y_new = jnp.where(ok, y_new, y + a_lo * dy)
+        f_new = jnp.where(ok, f_new, fn(y + a_lo * dy, None))
+        done = jnp.max(jnp.abs(f_new)) <= tol(y_new)
+        return y_new, f_new, it + 1, done
 
     f0 = fn(y0, None)
-    y, it, _, _ = lax.while_loop(cond, body, (y0, jnp.array(0), f0, jnp.array(False)))
+    c0 = (y0, f0, jnp.array(0), jnp.max(jnp.abs(f0)) <= tol(y0))
+    y, _, it, _ = lax.while_loop(cond, body, c0)
     return lax.stop_gradient(y), it
 
 
@@ -186,7 +230,7 @@ def solve_line_statics(
     *,
     rtol: float = 1e-10,
     atol: float = 1e-8,
-    max_steps: int = 100,
+    max_steps: int = 500,
     throw: bool = True,
 ) -> LineStatics:
     """Static equilibrium of one line with its ends where they are at time t.
@@ -195,9 +239,12 @@ def solve_line_statics(
         line, env: the line and its environment.
         t: time at which the end positions are taken [s].
         init: starting state (default: :func:`initial_guess`).
-        rtol, atol: Newton step tolerances, relative to the positions and absolute
-            [m]; the default resolves 100 m positions to ~1e-8 m.
-        max_steps: Newton iteration limit.
+        rtol, atol: tolerances of the final Newton polish's steps, relative to
+            the positions and absolute [m]; ``atol`` also caps the descent's
+            residual (forces / (EA/l), in m). The result is ``converged`` when
+            the largest free-node force imbalance is below 1e-6 of the largest
+            tension (or of one segment's weight), or at float64 resolution.
+        max_steps: iteration limit of the descent and of the polish.
         throw: raise ``RuntimeError`` if Newton fails (otherwise inspect
             ``converged``).
     """
@@ -219,32 +266,39 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     r0 = initial_guess(line, env, t).r if init is None else init.r
     fn = _residual(line, env, t)
-    # 1) a damped Newton (backtracking on the residual) finds the equilibrium
-    #    robustly from the catenary guess. It uses a bilateral axial law: on coarse
-    #    meshes the catenary guess has chords shorter than the unstretched element
-    #    (slack, zero stiffness, a singular Jacobian); letting those segments push
-    #    keeps Newton well-posed, and where the equilibrium is taut (the usual case)
-    #    both laws have the same solution. 2) optimistix's Newton with the true law,
+    # 1) a regularised Newton descent on the static energy (``_descent``) finds the
+    #    equilibrium from the catenary guess with the true (tension-only) law: it
+    #    cannot stall on the touchdown or slack kinks, and stops 100× below the
+    #    force imbalance that counts as converged (never below what float64
+    #    resolves: positions carry eps·|r| of rounding). 2) optimistix's Newton,
     #    started there, polishes it and attaches implicit-function gradients.
-    axial = line.line_type.axial
-    bilateral = axial if isinstance(axial, Bilateral) else Bilateral(axial)
-    line_bi = eqx.tree_at(lambda ln: ln.line_type.axial, line, bilateral)
-    fn_bi = _residual(line_bi, env, t)
-    r_start, damped_steps = _damped_newton(fn_bi, lax.stop_gradient(r0), atol, rtol, max_steps)
+    k = line.line_type.axial.nominal_ea() / line.segment_length
+    scale = _force_scale(line, env, t)
+
+    def floor(y):
+        return 16.0 * jnp.finfo(y.dtype).eps * jnp.maximum(jnp.max(jnp.abs(y)), line.length)
+
+    def tol(y):
+        return jnp.maximum(jnp.minimum(atol, 1e-8 * scale(y) / k), floor(y))
+
+    r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length)
     solver = optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver())
     sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
-    # a diverged polish must not hand back NaN: keep the last finite iterate (the
-    # result is then flagged not converged by its force imbalance)
-    r_free = jnp.where(jnp.all(jnp.isfinite(sol.value)), sol.value, r_start)
+    # A polish that fails (NaN where the Jacobian is singular: slack line piled on
+    # the bed) or does worse leaves the descent's iterate; either is judged by its
+    # force imbalance alone.
+    res_start = jnp.max(jnp.abs(fn(r_start, None)))
+    res_polish = jnp.max(jnp.abs(fn(sol.value, None)))
+    polished = jnp.all(jnp.isfinite(sol.value)) & (res_polish <= jnp.maximum(res_start, tol(r_start)))
+    r_free = jnp.where(polished, sol.value, r_start)
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element
     force = element.nodal_forces(line, env, r, v0)
     max_res = jnp.max(jnp.abs(force[1:-1]))
     tensions = element.segment_tensions(line, r, v0)
-    scale = jnp.maximum(jnp.max(jnp.abs(tensions)), 1.0)
-    converged = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(r)) & (
-        max_res < 1e-6 * scale
+    converged = jnp.all(jnp.isfinite(r)) & (
+        max_res < jnp.maximum(1e-6 * scale(r_free), 100.0 * k * floor(r_free))
     )
     fa, fb = force[0], force[-1]
     out = LineStatics(
