@@ -2,6 +2,7 @@
 
 ``simulate`` integrates the lines' Galerkin equations from an initial state (by
 default the static equilibrium at t0) and returns end forces at requested times.
+A run must stay within the time span of every tabulated motion it is given.
 The core is one ``eqx.filter_jit``-compiled function: calling it again with other
 parameter *values* (EA, Cd, lengths, motions of the same shape) does not
 recompile; changing structure (segment counts, force terms, solver) does.
@@ -197,6 +198,8 @@ def plan(
         tsn = np.asarray(ts)
         if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
             raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
+        if scene is not None:
+            check_time_span(scene, float(t0), float(tsn[-1]))
     if atol_velocity is None:
         atol_velocity = 100.0 * float(atol)
     for name, tol, unit, hi in (
@@ -247,6 +250,34 @@ def plan(
 _DT_MIN = 1e-9  # [s] smallest adaptive step, relative to max(1 s, end time)
 
 
+def check_time_span(scene, t0, t1):
+    """Refuse a run from ``t0`` to ``t1`` [s] that leaves the time span of one of
+    the scene's line ends (a tabulated motion): ``ValueError`` naming the line,
+    the end, both spans and the fix. Spans that are traced values are skipped."""
+    tol = 1e-9 * max(1.0, abs(t0), abs(t1))
+    for line in scene.lines:
+        for name, end in (("A", line.end_a), ("B", line.end_b)):
+            lo, hi = end.time_span()
+            if isinstance(lo, jax.core.Tracer) or isinstance(hi, jax.core.Tracer):
+                continue
+            lo, hi = float(lo), float(hi)
+            where = f"line {line.label} end {name}: its prescribed motion"
+            need = f"the motion must cover the whole run, t = {t0:.10g} to {t1:.10g} s"
+            if lo > t0 + tol:
+                raise ValueError(
+                    f"{where} starts at t = {lo:.10g} s, after the start of the run t0 = "
+                    f"{t0:.10g} s; {need}: give it from t0 on, or start the run at "
+                    f"t0 = {lo:.10g} s"
+                )
+            if hi < t1 - tol:
+                raise ValueError(
+                    f"{where} ends at t = {hi:.10g} s, before the end of the run at "
+                    f"{t1:.10g} s; {need}: extend it to at least {t1:.10g} s (to hold the "
+                    "point still, add rows at its last position with zero velocity) or "
+                    "shorten the run"
+                )
+
+
 def _first_bad_time(ts, tension):
     bad = ~np.all(np.isfinite(tension), axis=-1)
     return float(ts[np.argmax(bad)]) if bad.any() else None
@@ -280,6 +311,9 @@ def simulate(
         scene: a :class:`moorjax.Scene`.
         duration: simulated time after ``t0`` [s] (or give ``ts``).
         ts: output times [s] (increasing, > t0); default every ``dt_out`` s.
+        t0: start time [s]. Every tabulated motion of the scene must cover
+            ``[t0, end of the run]``: a run that leaves it raises ``ValueError``
+            (a point is never held still past the end of its motion).
         init: tuple of :class:`LineState` (default: static equilibrium at t0),
             followed by each body's 1-D state (default: at rest at η = 0 when
             only line states are given).
