@@ -85,8 +85,8 @@ def test_columns_and_times(held_run):
     assert rc == 0, err
     header, data = read_csv(out)
     assert header == COLUMNS
-    # default --dt-out 0.05 s: 0.05 … 1.0 s
-    np.testing.assert_allclose(data[:, 0], np.arange(1, 21) * 0.05, atol=1e-12)
+    # default --dt-out 0.05 s: 0 (the initial state) … 1.0 s
+    np.testing.assert_allclose(data[:, 0], np.arange(0, 21) * 0.05, atol=1e-12)
     assert np.all(np.isfinite(data))
 
 
