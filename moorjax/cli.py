@@ -19,7 +19,6 @@ import argparse
 import json
 import sys
 import time
-import warnings
 
 import numpy as np
 
@@ -89,11 +88,8 @@ def _load_for_dynamics(args, with_motion=False):
     if not (np.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration = {args.duration} s must be > 0")
     deck, scene, motion = _load(args, args.motion)
-    if motion is not None and motion.t[-1] < args.duration:
-        warnings.warn(
-            f"{args.motion}: motion ends at t = {motion.t[-1]} s before --duration "
-            f"{args.duration} s; coupled points hold their last position afterwards"
-        )
+    if motion is not None:
+        _check_motion_covers(args.motion, motion.t, args.duration)
     kwargs = dict(
         solver=args.solver,
         rtol=args.rtol,
@@ -103,6 +99,19 @@ def _load_for_dynamics(args, with_motion=False):
         dt_out=args.dt_out,
     )
     return (deck, scene, kwargs, motion) if with_motion else (deck, scene, kwargs)
+
+
+def _check_motion_covers(path, t, duration):
+    """The motion must cover the run, t = 0 to ``duration`` [s]: a ValueError
+    naming the file and both time spans otherwise (no point is ever held still)."""
+    tol = 1e-9 * max(1.0, duration)
+    if t[0] > tol or t[-1] < duration - tol:
+        raise ValueError(
+            f"{path}: the motion covers t = {t[0]:.10g} to {t[-1]:.10g} s but the run needs "
+            f"t = 0 to {duration:.10g} s (--duration); give the motion from t = 0 to at least "
+            f"{duration:.10g} s (to hold a point still, add rows at its last position with "
+            "zero velocity) or shorten --duration"
+        )
 
 
 def cmd_simulate(args) -> int:

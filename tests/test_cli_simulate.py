@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -86,8 +85,8 @@ def test_columns_and_times(held_run):
     assert rc == 0, err
     header, data = read_csv(out)
     assert header == COLUMNS
-    # default --dt-out 0.05 s: 0.05 … 1.0 s
-    np.testing.assert_allclose(data[:, 0], np.arange(1, 21) * 0.05, atol=1e-12)
+    # default --dt-out 0.05 s: 0 (the initial state) … 1.0 s
+    np.testing.assert_allclose(data[:, 0], np.arange(0, 21) * 0.05, atol=1e-12)
     assert np.all(np.isfinite(data))
 
 
@@ -223,14 +222,10 @@ def test_tolerance_out_of_range(tmp_path, capsys, flag, value, expect):
     assert expect in err and "out of range" in err, err
 
 
-def test_motion_shorter_than_duration_warns(tmp_path):
-    """Not an error: the point holds its last position, with a warning naming the file."""
+def test_motion_shorter_than_duration_is_refused(tmp_path, capsys):
+    """An error naming the file and both time spans (the point is never held still:
+    see tests/test_output_times.py)."""
     motion = write_motion(tmp_path / "short.csv", np.linspace(0.0, 0.5, 51), surge)
     out = tmp_path / "out.csv"
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        # an invalid tolerance stops the run right after the warning (no compile)
-        rc = main(sim_args(out, "--motion", str(motion), "--rtol", "2"))
-    assert rc == 2
-    assert any("short.csv" in str(w.message) and "before --duration" in str(w.message)
-               for w in caught)
+    err = run_bad(capsys, sim_args(out, "--motion", str(motion)), out)
+    assert "short.csv" in err and "t = 0 to 0.5 s" in err and "t = 0 to 1 s" in err, err

@@ -45,7 +45,7 @@ def batch_result():
 
 def test_vmapped_ensemble_equals_members_run_one_by_one(batch_result):
     res = batch_result
-    assert res.tension_b.shape == (3, 20, 1)
+    assert res.tension_b.shape == (3, 21, 1)  # t = 0, 0.1, … 2 s
     assert list(status(res)) == ["ok"] * 3
     for i, s in enumerate(MEMBERS):
         single = simulate(s, DURATION, **SETTINGS)
@@ -158,7 +158,7 @@ def test_sharded_over_four_cpu_devices_equals_unsharded():
                           timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert out["shape"] == [5, 20, 1]
+    assert out["shape"] == [5, 21, 1]
     assert out["devices"] == 4
     assert out["diff"] <= 1e-10 * out["scale"]
 

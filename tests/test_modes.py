@@ -163,9 +163,9 @@ def test_plucked_taut_line_period():
         scene, n_periods * period, dt_out=period / 100, init=init, save_nodes=True,
         rtol=1e-8, atol=1e-8, atol_velocity=1e-8,
     )
-    ts = np.concatenate([[0.0], np.asarray(res.ts)])
+    ts = np.asarray(res.ts)  # from t = 0, the initial state
     mid = np.asarray(res.positions[0])[:, n // 2]
-    y = np.concatenate([[amp], (mid - END_A) @ NORMAL])
+    y = (mid - END_A) @ NORMAL
     i = np.flatnonzero(np.sign(y[:-1]) != np.sign(y[1:]))
     # linear interpolation of the crossings: the sine is straight at a zero crossing
     crossings = ts[i] - y[i] * (ts[i + 1] - ts[i]) / (y[i + 1] - y[i])

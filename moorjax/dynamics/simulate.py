@@ -1,7 +1,9 @@
 """Time-domain simulation of a scene with diffrax.
 
 ``simulate`` integrates the lines' Galerkin equations from an initial state (by
-default the static equilibrium at t0) and returns end forces at requested times.
+default the static equilibrium at t0) and returns end forces at requested times
+(by default every ``dt_out`` from t0, the initial state, to the end of the run).
+A run must stay within the time span of every tabulated motion it is given.
 The core is one ``eqx.filter_jit``-compiled function: calling it again with other
 parameter *values* (EA, Cd, lengths, motions of the same shape) does not
 recompile; changing structure (segment counts, force terms, solver) does.
@@ -29,7 +31,7 @@ class SimulationResult(eqx.Module):
     """Outputs of :func:`simulate` (leading axis: output times).
 
     Attributes:
-        ts: (k,) output times [s].
+        ts: (k,) output times [s] (by default t0, t0 + dt_out, …, t0 + duration).
         tension_a, tension_b: (k, n_lines) end tensions [N] (magnitude of the force
             the line exerts on its end A / B point).
         force_a, force_b: (k, n_lines, 3) those forces [N].
@@ -184,19 +186,18 @@ def plan(
             raise ValueError(f"duration = {duration} s must be a positive finite number")
         if not (np.isfinite(dt_out) and dt_out > 0):
             raise ValueError(f"dt_out = {dt_out} s must be > 0")
-        # every dt_out exactly, ending with the duration itself
-        k = int(np.floor(duration / dt_out * (1 + 1e-12)))
-        ts = dt_out * np.arange(1, k + 1)
-        if k == 0 or duration - ts[-1] > 1e-9 * duration:
-            ts = np.append(ts, duration)
-        ts = t0 + ts
+        ts = t0 + default_output_times(duration, dt_out)
     ts = jnp.asarray(ts, dtype=float)
     if ts.ndim != 1 or ts.shape[0] < 1:
         raise ValueError("output times ts must be a non-empty 1-D array [s]")
     if not isinstance(ts, jax.core.Tracer):
         tsn = np.asarray(ts)
-        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] <= t0:
-            raise ValueError(f"output times [s] must be finite, increasing and > t0 = {t0}")
+        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] < t0:
+            raise ValueError(f"output times [s] must be finite, increasing and >= t0 = {t0}")
+        if tsn[-1] <= t0:
+            raise ValueError(f"the last output time {tsn[-1]} s must be after t0 = {t0} s")
+        if scene is not None:
+            check_time_span(scene, float(t0), float(tsn[-1]))
     if atol_velocity is None:
         atol_velocity = 100.0 * float(atol)
     for name, tol, unit, hi in (
@@ -247,6 +248,45 @@ def plan(
 _DT_MIN = 1e-9  # [s] smallest adaptive step, relative to max(1 s, end time)
 
 
+def default_output_times(duration, dt_out):
+    """0, dt_out, 2·dt_out, … [s] after the start, ending with ``duration`` itself
+    (exactly: the last sample is where the run ends)."""
+    k = int(np.floor(duration / dt_out * (1 + 1e-12)))
+    ts = dt_out * np.arange(k + 1)
+    if duration - ts[-1] > 1e-9 * duration:
+        return np.append(ts, duration)
+    ts[-1] = duration
+    return ts
+
+
+def check_time_span(scene, t0, t1):
+    """Refuse a run from ``t0`` to ``t1`` [s] that leaves the time span of one of
+    the scene's line ends (a tabulated motion): ``ValueError`` naming the line,
+    the end, both spans and the fix. Spans that are traced values are skipped."""
+    tol = 1e-9 * max(1.0, abs(t0), abs(t1))
+    for line in scene.lines:
+        for name, end in (("A", line.end_a), ("B", line.end_b)):
+            lo, hi = end.time_span()
+            if isinstance(lo, jax.core.Tracer) or isinstance(hi, jax.core.Tracer):
+                continue
+            lo, hi = float(lo), float(hi)
+            where = f"line {line.label} end {name}: its prescribed motion"
+            need = f"the motion must cover the whole run, t = {t0:.10g} to {t1:.10g} s"
+            if lo > t0 + tol:
+                raise ValueError(
+                    f"{where} starts at t = {lo:.10g} s, after the start of the run t0 = "
+                    f"{t0:.10g} s; {need}: give it from t0 on, or start the run at "
+                    f"t0 = {lo:.10g} s"
+                )
+            if hi < t1 - tol:
+                raise ValueError(
+                    f"{where} ends at t = {hi:.10g} s, before the end of the run at "
+                    f"{t1:.10g} s; {need}: extend it to at least {t1:.10g} s (to hold the "
+                    "point still, add rows at its last position with zero velocity) or "
+                    "shorten the run"
+                )
+
+
 def _first_bad_time(ts, tension):
     bad = ~np.all(np.isfinite(tension), axis=-1)
     return float(ts[np.argmax(bad)]) if bad.any() else None
@@ -279,7 +319,12 @@ def simulate(
     Args:
         scene: a :class:`moorjax.Scene`.
         duration: simulated time after ``t0`` [s] (or give ``ts``).
-        ts: output times [s] (increasing, > t0); default every ``dt_out`` s.
+        ts: output times [s] (increasing, >= t0; the run ends at the last);
+            default every ``dt_out`` s from t0 (the initial state) to
+            ``t0 + duration`` (exactly, also when ``dt_out`` does not divide it).
+        t0: start time [s]. Every tabulated motion of the scene must cover
+            ``[t0, end of the run]``: a run that leaves it raises ``ValueError``
+            (a point is never held still past the end of its motion).
         init: tuple of :class:`LineState` (default: static equilibrium at t0),
             followed by each body's 1-D state (default: at rest at η = 0 when
             only line states are given).

@@ -30,6 +30,15 @@ class AbstractEnd(eqx.Module):
     def acceleration(self, t) -> Array:
         """(3,) [m/s²]."""
 
+    def time_span(self) -> tuple:
+        """The times [s] (first, last) within which the end is defined.
+
+        A simulation must stay inside it (:func:`moorjax.dynamics.simulate`
+        refuses a run that leaves it); paths given by a formula are defined at
+        all times.
+        """
+        return -float("inf"), float("inf")
+
 
 class FixedEnd(AbstractEnd):
     """An anchor or a held fairlead at ``point`` (3,) [m]."""
@@ -147,8 +156,15 @@ class TabulatedPath(AbstractEnd):
 
     Without sampled velocities the spline slopes come from central differences of
     the positions (one-sided at the ends), so velocity is the exact derivative of
-    the interpolated position. Outside the table the end holds its first/last
-    position at rest.
+    the interpolated position.
+
+    The path is defined on ``[t[0], t[-1]]`` (:meth:`time_span`); a simulation
+    must stay within it. Just outside, the first and last cubics continue
+    (position, velocity and acceleration of the same polynomial), because an
+    implicit Runge–Kutta step may evaluate its stages past the step's end
+    (Kvaerno5 at 1.23 steps, Kvaerno4 at 1.15): a run that ends on the last
+    sample then sees the path's own smooth continuation there, not a point that
+    stops dead. Far outside, that cubic is no sensible motion: extend the table.
 
     Args:
         t: (k,) strictly increasing sample times [s], k ≥ 2.
@@ -178,16 +194,19 @@ class TabulatedPath(AbstractEnd):
             check_finite(v, "path velocity", "m/s")
         self.t, self.r, self.v = t, r, v
 
+    def time_span(self):
+        return self.t[0], self.t[-1]
+
     def _locate(self, t):
-        tc = jnp.clip(t, self.t[0], self.t[-1])
-        i = jnp.clip(jnp.searchsorted(self.t, tc, side="right") - 1, 0, self.t.shape[0] - 2)
+        """Interval i, its length h [s] and the local coordinate s (in [0, 1] inside
+        the interval; < 0 before the table, > 1 after it: the end cubics continue)."""
+        i = jnp.clip(jnp.searchsorted(self.t, t, side="right") - 1, 0, self.t.shape[0] - 2)
         h = self.t[i + 1] - self.t[i]
-        s = (tc - self.t[i]) / h
-        inside = (t >= self.t[0]) & (t <= self.t[-1])
-        return i, h, s, inside
+        s = (t - self.t[i]) / h
+        return i, h, s
 
     def position(self, t):
-        i, h, s, _ = self._locate(t)
+        i, h, s = self._locate(t)
         h00 = 2 * s**3 - 3 * s**2 + 1
         h10 = s**3 - 2 * s**2 + s
         h01 = -2 * s**3 + 3 * s**2
@@ -195,16 +214,14 @@ class TabulatedPath(AbstractEnd):
         return h00 * self.r[i] + h10 * h * self.v[i] + h01 * self.r[i + 1] + h11 * h * self.v[i + 1]
 
     def velocity(self, t):
-        i, h, s, inside = self._locate(t)
+        i, h, s = self._locate(t)
         d00 = 6 * s**2 - 6 * s
         d10 = 3 * s**2 - 4 * s + 1
         d01 = -6 * s**2 + 6 * s
         d11 = 3 * s**2 - 2 * s
-        v = (d00 * self.r[i] + d01 * self.r[i + 1]) / h + d10 * self.v[i] + d11 * self.v[i + 1]
-        return jnp.where(inside, v, 0.0)
+        return (d00 * self.r[i] + d01 * self.r[i + 1]) / h + d10 * self.v[i] + d11 * self.v[i + 1]
 
     def acceleration(self, t):
-        i, h, s, inside = self._locate(t)
-        a = ((12 * s - 6) * (self.r[i] - self.r[i + 1]) / h
-             + (6 * s - 4) * self.v[i] + (6 * s - 2) * self.v[i + 1]) / h
-        return jnp.where(inside, a, 0.0)
+        i, h, s = self._locate(t)
+        return ((12 * s - 6) * (self.r[i] - self.r[i + 1]) / h
+                + (6 * s - 4) * self.v[i] + (6 * s - 2) * self.v[i + 1]) / h
