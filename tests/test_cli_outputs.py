@@ -1,0 +1,374 @@
+"""What a new user meets (issue 16): bundled examples that move, netCDF and CSV
+outputs with units, plots, checks of options before any compile, plausibility
+warnings, exit codes, ``--version`` and ``python -m moorjax``, help text,
+progress.
+
+Dynamic runs use ``example:taut_polyester`` at 6 segments for 1 s (one compile of
+the integrator for the module; each further run costs its static solve).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import moorjax
+from moorjax import cli
+from moorjax.cli import main
+from moorjax.examples import EXAMPLES, example
+from moorjax.examples.motions import sample
+from moorjax.io import read_motion
+
+DECK = "example:taut_polyester"
+BASE = ["--duration", "1", "--segments", "6", "--dt-out", "0.1"]
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(*argv):
+    """(exit code, stdout, stderr) of ``moorjax argv``, warnings as the CLI prints them."""
+    out, err = io.StringIO(), io.StringIO()
+    def show(message, category, filename, lineno, file=None, line=None):
+        sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+            warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = show  # as outside pytest (which records warnings)
+        rc = main(list(map(str, argv)))
+    return rc, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def example_run(tmp_path_factory):
+    """The bundled example with its own motion, written as netCDF and CSV."""
+    d = tmp_path_factory.mktemp("example")
+    rc, _, err = run("simulate", DECK, *BASE, "--out", d / "run.nc")
+    assert rc == 0, err
+    rc, _, err2 = run("simulate", DECK, *BASE, "--out", d / "run.csv")
+    assert rc == 0, err2
+    return d, err
+
+
+# ------------------------------------------------------------------ examples
+
+
+def test_examples_ship_their_motion():
+    """Each example's motion file is the deck's sine surge (exact at the samples,
+    with the exact velocity) and covers 600 s."""
+    for name in EXAMPLES:
+        ex = example(name)
+        m = read_motion(ex.motion, [ex.point])
+        assert m.t[0] == 0.0 and m.t[-1] >= 600.0
+        ref = sample(ex, m.t)
+        np.testing.assert_allclose(m.positions[ex.point], ref[:, 1:4], atol=1e-8)
+        np.testing.assert_allclose(m.velocities[ex.point], ref[:, 4:7], atol=1e-8)
+        x = m.positions[ex.point][:, 0]
+        assert np.ptp(x) == pytest.approx(2 * ex.amplitude, rel=1e-6)
+
+
+def test_examples_listing_says_what_each_shows():
+    rc, out, _ = run("examples")
+    assert rc == 0
+    for name in EXAMPLES:
+        ex = example(name)
+        assert f"example:{name}" in out and ex.shows in out and ex.motion in out
+
+
+def test_example_moves_by_default(example_run):
+    """Without --motion the example runs with its surge: the fairlead moves along x
+    as the file says, and the tension varies by far more than a held line's."""
+    d, _ = example_run
+    ds = xr.open_dataset(d / "run.nc")
+    ex = example("taut_polyester")
+    xb = ds["position_b"].sel(line=1, axis="x").values
+    np.testing.assert_allclose(xb, sample(ex, ds["time"].values)[:, 1], atol=1e-4)
+    tb = ds["tension_b"].sel(line=1).values
+    assert np.ptp(tb) > 0.5 * np.mean(tb)
+    assert "motion.csv" in ds.attrs["motion"]
+
+
+# ------------------------------------------------------------------ outputs
+
+
+def test_netcdf_structure(example_run):
+    d, _ = example_run
+    ds = xr.open_dataset(d / "run.nc")
+    assert {"time", "line", "node", "segment", "point", "axis"} <= set(ds.dims)
+    assert ds.sizes["node"] == 7 and ds.sizes["segment"] == 6
+    for name, unit in (("tension_a", "N"), ("tension_b", "N"), ("force_b", "N"),
+                       ("node_position", "m"), ("segment_tension", "N"), ("point_force", "N"),
+                       ("position_b", "m")):
+        assert ds[name].attrs["units"] == unit and ds[name].attrs["long_name"]
+    assert ds["time"].attrs["units"] == "s"
+    assert ds.attrs["moorjax_version"] == moorjax.__version__
+    assert "LINE TYPES" in ds.attrs["deck_text"]
+    assert json.loads(ds.attrs["settings"])["solver"] == "kvaerno5"
+    # the end nodes are the ends; the fairlead force is the point's force
+    np.testing.assert_allclose(ds["node_position"].isel(node=-1).values, ds["position_b"].values)
+    np.testing.assert_allclose(ds["point_force"].sel(point=2).values,
+                               ds["force_b"].sel(line=1).values)
+    np.testing.assert_allclose(np.linalg.norm(ds["force_b"].values, axis=-1), ds["tension_b"].values,
+                               rtol=1e-12)
+    # segment tensions next to the fairlead approach its tension (end node's own
+    # weight and drag are small for this light line)
+    np.testing.assert_allclose(ds["segment_tension"].isel(segment=-1).values, ds["tension_b"].values,
+                               rtol=0.05)
+
+
+def test_csv_header_units_and_numbers(example_run):
+    """Header row as before, then a ``# units:`` row, then 10 significant digits;
+    numpy readers that skip comments see the old layout; same numbers as the .nc."""
+    d, _ = example_run
+    lines = (d / "run.csv").read_text().splitlines()
+    assert lines[0] == "t,L1_tension_a,L1_tension_b,P2_Fx,P2_Fy,P2_Fz"
+    assert lines[1] == "# units: s,N,N,N,N,N"
+    assert all(len(c) <= 17 for c in lines[2].split(","))  # no 5.000000000000000278e-02
+    data = np.loadtxt(d / "run.csv", delimiter=",", skiprows=1)
+    ds = xr.open_dataset(d / "run.nc")
+    np.testing.assert_allclose(data[:, 0], ds["time"].values, atol=1e-12)  # the run's own times
+    np.testing.assert_allclose(data[:, 2], ds["tension_b"].sel(line=1).values, rtol=1e-9)
+
+
+def test_no_nodes_and_python_dataset(tmp_path):
+    """``--no-nodes`` leaves node variables out; in Python, ``to_dataset`` of a
+    ``simulate(save_nodes=True)`` result equals the CLI's file."""
+    from moorjax.dynamics import simulate
+    from moorjax.io import build_scene, read_deck, read_deck_motion
+    from moorjax.io.dataset import to_dataset
+
+    rc, _, err = run("simulate", DECK, *BASE, "--no-nodes", "--out", tmp_path / "a.nc")
+    assert rc == 0, err
+    slim = xr.open_dataset(tmp_path / "a.nc")
+    assert "node_position" not in slim and "segment_tension" not in slim
+    ex = example("taut_polyester")
+    deck = read_deck(ex.deck)
+    motion = read_deck_motion(ex.motion, deck)
+    scene = build_scene(deck, segments=6, motion=motion)
+    res = simulate(scene, 1.0, dt_out=0.1, save_nodes=True)
+    ds = to_dataset(res, scene, deck=deck, motion=motion)
+    assert isinstance(ds, xr.Dataset) and ds["node_position"].shape == (len(res.ts), 1, 7, 3)
+    np.testing.assert_allclose(ds["tension_b"].values, slim["tension_b"].values, rtol=1e-10)
+
+
+def test_motion_none_holds_the_fairlead(tmp_path):
+    rc, _, err = run("simulate", DECK, *BASE, "--motion", "none", "--out", tmp_path / "h.nc")
+    assert rc == 0, err
+    ds = xr.open_dataset(tmp_path / "h.nc")
+    assert np.ptp(ds["position_b"].values, axis=0).max() == 0.0
+    assert np.ptp(ds["tension_b"].values) < 1e-6 * float(ds["tension_b"].mean())
+
+
+def test_ensemble_writes_one_dataset(tmp_path):
+    out = tmp_path / "sweep"
+    rc, _, err = run("ensemble", DECK, *BASE, "--vary", "Cd=1.0,2.0", "--histories",
+                     "--chunk-size", "1", "--out", out)
+    assert rc == 0, err
+    ds = xr.open_dataset(out / "ensemble.nc")
+    assert ds.sizes["member"] == 2 and list(ds["Cd"].values) == [1.0, 2.0]
+    assert list(ds["status"].values) == ["ok", "ok"]
+    assert ds["tension_b"].dims == ("member", "time", "line")
+    assert ds["tension_b_max"].attrs["units"] == "N"
+    np.testing.assert_allclose(ds["tension_b_max"].values[:, 0], ds["tension_b"].max("time").values[:, 0])
+
+
+# ------------------------------------------------------------------ plots
+
+
+def test_plot_run_csv_and_animation(example_run, tmp_path):
+    d, _ = example_run
+    png = tmp_path / "run.png"
+    rc, _, err = run("plot", d / "run.nc", "--times", "0,0.5,1", "--out", png,
+                     "--animate", tmp_path / "run.gif", "--fps", "5")
+    assert rc == 0, err
+    assert png.stat().st_size > 10_000 and (tmp_path / "run.gif").stat().st_size > 1000
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    rc, _, err = run("plot", d / "run.csv", "--out", tmp_path / "csv.png")
+    assert rc == 0, err
+    rc, _, err = run("plot", d / "run.csv", "--animate", tmp_path / "x.gif", "--out", tmp_path / "y.png")
+    assert rc == 2 and "no node positions" in err
+
+
+def test_plot_statics_and_python_functions(tmp_path, example_run):
+    import matplotlib
+
+    from moorjax import plot
+
+    rc, _, err = run("plot-statics", "example:oc3_catenary", "--segments", "20",
+                     "--out", tmp_path / "layout.png")
+    assert rc == 0, err
+    assert (tmp_path / "layout.png").stat().st_size > 10_000
+    d, _ = example_run
+    ds = xr.open_dataset(d / "run.nc")
+    for fig in (plot.plot_tensions(ds), plot.plot_profiles(ds, [0.5]), plot.plot_run(ds)):
+        assert isinstance(fig, matplotlib.figure.Figure)
+    ax = plot.plot_profiles(ds, [0.5]).axes[0]
+    assert any(ln.get_label() == "seabed" and ln.get_ydata()[0] == -80.0 for ln in ax.lines)
+
+
+# ------------------------------------------------------------------ checks first
+
+
+@pytest.mark.parametrize("out, expect", [
+    ("run.txt", "unknown file type"),
+    ("missing_dir/run.nc", "does not exist"),
+    (".", "is a directory"),
+])
+def test_bad_out_refused_before_any_work(tmp_path, out, expect):
+    start = time.perf_counter()
+    rc, _, err = run("simulate", "example:oc3_catenary", "--duration", "600", "--out", tmp_path / out)
+    assert rc == 2 and expect in err, err
+    assert time.perf_counter() - start < 5.0  # nothing compiled or solved
+
+
+def test_bad_plot_out_and_fit_out(tmp_path):
+    rc, _, err = run("plot-statics", DECK, "--out", tmp_path / "x.nc")
+    assert rc == 2 and "unknown file type" in err
+    rc, _, err = run("fit", DECK, "--target", tmp_path / "t.csv", "--params", "Cd_normal",
+                     "--motion", tmp_path / "m.csv", "--out", tmp_path / "nowhere" / "fit.json")
+    assert rc == 2 and "does not exist" in err
+
+
+def test_motion_starting_late_warns(tmp_path):
+    m = tmp_path / "late.csv"
+    m.write_text("t,P2_x,P2_y,P2_z\n0.5,0,0,-5\n3,0.1,0,-5\n")
+    rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--rtol", "2", "--out", tmp_path / "o.nc")
+    # a bad option stops the run before any work, after checks of the motion
+    assert rc == 2 and "rtol" in err
+    rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--out", tmp_path / "o.nc")
+    assert rc == 0
+    assert "warning: " in err and "starts at t = 0.5 s" in err and "late.csv" in err
+
+
+def test_fairlead_above_the_surface_warns(tmp_path):
+    """A fairlead lifted from z = -5 m to +1 m: warned once, with time and line."""
+    m = tmp_path / "lift.csv"
+    t = np.linspace(0.0, 1.0, 11)
+    z = -5.0 + 6.0 * t
+    np.savetxt(m, np.column_stack([t, 0 * t, 0 * t, z]), delimiter=",", header="t,P2_x,P2_y,P2_z",
+               comments="")
+    rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--out", tmp_path / "o.nc")
+    assert rc == 0, err
+    lines = [ln for ln in err.splitlines() if "free surface" in ln]
+    assert len(lines) == 1 and lines[0].startswith("moorjax simulate: warning: line 1:"), err
+    assert "from t = 0.9 s" in lines[0]
+
+
+def test_strain_beyond_the_law_is_named():
+    """check_run on a dataset whose fairlead ran away: strain, time and line named."""
+    from moorjax.io.plausibility import check_run
+
+    t = np.array([0.0, 1.0])
+    nodes = np.zeros((2, 1, 3, 3))
+    nodes[:, 0, :, 2] = -50.0
+    nodes[0, 0, :, 0] = [0.0, 50.0, 100.0]
+    nodes[1, 0, :, 0] = [0.0, 50.0, 300.0]  # second segment 250 m long: strain 4
+    ds = xr.Dataset(dict(
+        node_position=(("time", "line", "node", "axis"), nodes),
+        tension_b=(("time", "line"), np.array([[1e5], [2.25e8]])),
+        unstretched_length=(("line",), [100.0]), n_segments=(("line",), [2]),
+    ), coords=dict(time=t, line=[3]))
+    (msg,) = check_run(ds)
+    assert "line 3" in msg and "strain 4 exceeds 0.5" in msg and "t = 1 s" in msg
+
+
+# ------------------------------------------------------------------ conventions
+
+
+def test_version_and_python_m():
+    assert isinstance(moorjax.__version__, str) and moorjax.__version__.count(".") == 2
+    with pytest.raises(SystemExit) as info, contextlib.redirect_stdout(io.StringIO()) as out:
+        main(["--version"])
+    assert info.value.code == 0 and out.getvalue().strip() == f"moorjax {moorjax.__version__}"
+    p = subprocess.run([sys.executable, "-m", "moorjax", "--version"], capture_output=True,
+                       text=True, cwd=ROOT, timeout=120,
+                       env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
+    assert p.returncode == 0 and p.stdout.strip() == f"moorjax {moorjax.__version__}"
+
+
+@pytest.mark.parametrize("exc, code, words", [
+    (ValueError("bad value"), 2, "bad value"),
+    (RuntimeError("simulation with kvaerno5 failed at t ≈ 3 s"), 3, "failed at t"),
+    (MemoryError(), 4, "out of memory"),
+    (RuntimeError("RESOURCE_EXHAUSTED: Out of memory allocating 1e12 bytes"), 4, "out of memory"),
+    (OSError(28, "No space left on device", "run.nc"), 4, "No space left"),
+    (FileNotFoundError(2, "No such file or directory", "deck.dat"), 2, "deck.dat"),
+    (KeyboardInterrupt(), 130, "interrupted"),
+])
+def test_exit_codes(monkeypatch, exc, code, words):
+    def boom(args):
+        raise exc
+    monkeypatch.setattr(cli, "cmd_statics", boom)
+    rc, _, err = run("statics", DECK)
+    assert rc == code
+    assert words in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1, err
+
+
+def test_long_tokens_are_clipped(tmp_path):
+    token = "x" * 1_000_000
+    rc, _, err = run("statics", tmp_path / token)
+    assert rc == 2 and len(err) < 1000 and "more characters" in err
+    with pytest.raises(SystemExit), contextlib.redirect_stderr(io.StringIO()) as e:
+        main(["statics", DECK, "--segments", token])
+    assert len(e.getvalue()) < 1000
+
+
+def test_help_has_defaults_examples_and_no_markup():
+    parser = cli.build_parser()
+    top = parser.format_help()
+    assert "``" not in top and "exit codes" in top and "moorjax simulate" in top
+    subs = parser._subparsers._group_actions[0].choices
+    for name, sp in subs.items():
+        text = sp.format_help()
+        assert "example:\n  moorjax " + name in text, name
+    sim = subs["simulate"].format_help()
+    for frag in ("(default: kvaerno5)", "(default: 1e-05)", "(default: 0.05)", "(default: 0.0)"):
+        assert frag in " ".join(sim.split()), frag
+
+
+def test_fit_json_names_the_optimiser(tmp_path):
+    """The JSON says ``lbfgs``/``adam`` (as given), not optax's class name; 0 steps
+    and no covariance keep it to one loss evaluation."""
+    d = tmp_path
+    rc, _, err = run("simulate", DECK, *BASE, "--out", d / "target.csv")
+    assert rc == 0, err
+    motion = d / "motion.csv"
+    rows = sample(example("taut_polyester"), np.linspace(0.0, 1.0, 11))
+    np.savetxt(motion, rows, delimiter=",", header="t,P2_x,P2_y,P2_z,P2_vx,P2_vy,P2_vz", comments="")
+    rc, _, err = run("fit", DECK, "--target", d / "target.csv", "--params", "Cd_normal",
+                     "--motion", motion, "--segments", "6", "--steps", "0", "--no-covariance", "--dt", "0.05",
+                     "--out", d / "fit.json")
+    assert rc == 0, err
+    assert json.loads((d / "fit.json").read_text())["settings"]["optimizer"] == "lbfgs"
+
+
+# ------------------------------------------------------------------ progress
+
+
+class _Tty(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_only_on_a_terminal():
+    from moorjax._progress import Progress, enabled
+
+    assert not enabled(False, io.StringIO()) and not enabled(True, _Tty())
+    assert enabled(False, _Tty())
+    s = _Tty()
+    p = Progress("simulate", True, stream=s)
+    with p.meter(0.0, 60.0):
+        print("0.00%")
+        print("50.00%")
+    text = s.getvalue()
+    assert "t = 30 / 60 s simulated" in text and "50.0%" in text and text.endswith("\n")
