@@ -114,6 +114,12 @@ def cmd_statics(args) -> int:
                 f"(max force imbalance {float(st.max_residual):.3g} N after "
                 f"{int(st.iterations)} Newton iterations)"
             )
+        z_top = float(np.max(np.asarray(st.positions)[:, 2]))
+        if z_top > 0.0:
+            warnings.warn(
+                f"line {line.label}: nodes above the free surface at equilibrium (highest "
+                f"z = {z_top:.4g} m); moorjax has no free-surface model, so buoyancy acts "
+                "there as if submerged")
         rows.append(
             dict(
                 id=int(line.label) if line.label.isdigit() else line.label,
@@ -155,7 +161,6 @@ def _load_for_dynamics(args, with_motion=False):
     if not np.isfinite(args.t0):
         raise ValueError(f"--t0 = {args.t0} s must be finite")
     kwargs = _settings(args)
-    plan(args.duration, t0=args.t0, **kwargs)  # raises ValueError naming a bad setting
     motion_path = _motion_path(args)
     deck, scene, motion = _load(args, motion_path)
     if motion is not None:
@@ -169,6 +174,7 @@ def _load_for_dynamics(args, with_motion=False):
                 f"{motion_path}: motion ends at t = {motion.t[-1]:g} s before --duration "
                 f"{args.duration:g} s (t = {t_end:g} s); coupled points hold their last position "
                 "afterwards")
+    plan(args.duration, t0=args.t0, **kwargs)  # raises ValueError naming a bad setting
     kwargs["t0"] = args.t0
     return (deck, scene, kwargs, motion) if with_motion else (deck, scene, kwargs)
 
@@ -320,7 +326,7 @@ def cmd_ensemble(args) -> int:
             for j in range(len(ids)):
                 cols_i += [data["tension_a"][i, :, j], data["tension_b"][i, :, j]]
             np.savetxt(os.path.join(hdir, f"member_{i:05d}.csv"), np.column_stack(cols_i),
-                       delimiter=",", header=",".join(hcols), comments="", fmt="%.10g")
+                       delimiter=",", header=",".join(hcols), comments="", fmt="%.15g")
     from .io.ensemble import ensemble_dataset
 
     ds = ensemble_dataset(data, table, names, ids, attrs=dict(

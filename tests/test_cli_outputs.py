@@ -126,17 +126,18 @@ def test_netcdf_structure(example_run):
 
 
 def test_csv_header_units_and_numbers(example_run):
-    """Header row as before, then a ``# units:`` row, then 10 significant digits;
+    """Header row as before, then a ``# units:`` row, then at most 15 significant digits;
     numpy readers that skip comments see the old layout; same numbers as the .nc."""
     d, _ = example_run
     lines = (d / "run.csv").read_text().splitlines()
     assert lines[0] == "t,L1_tension_a,L1_tension_b,P2_Fx,P2_Fy,P2_Fz"
     assert lines[1] == "# units: s,N,N,N,N,N"
-    assert all(len(c) <= 17 for c in lines[2].split(","))  # no 5.000000000000000278e-02
+    assert all(len(c) <= 22 for c in lines[2].split(","))  # no 5.000000000000000278e-02
     data = np.loadtxt(d / "run.csv", delimiter=",", skiprows=1)
     ds = xr.open_dataset(d / "run.nc")
     np.testing.assert_allclose(data[:, 0], ds["time"].values, atol=1e-12)  # the run's own times
-    np.testing.assert_allclose(data[:, 2], ds["tension_b"].sel(line=1).values, rtol=1e-9)
+    np.testing.assert_allclose(data[:, 2], ds["tension_b"].sel(line=1).values, rtol=1e-14)
+    assert lines[2].split(",")[0] in ("0", "0.1")  # the run's first time, written plainly
 
 
 def test_no_nodes_and_python_dataset(tmp_path):
@@ -372,3 +373,13 @@ def test_progress_only_on_a_terminal():
         print("50.00%")
     text = s.getvalue()
     assert "t = 30 / 60 s simulated" in text and "50.0%" in text and text.endswith("\n")
+
+
+def test_statics_warns_of_a_fairlead_above_the_surface(tmp_path):
+    text = Path(example("taut_polyester").deck).read_text()
+    deck = tmp_path / "high.dat"
+    deck.write_text(text.replace("2  Coupled 0.0 0.0 -5.0", "2  Coupled 0.0 0.0 1.0"))
+    rc, out, err = run("statics", deck, "--segments", "6", "--json")
+    assert rc == 0, err
+    assert "moorjax statics: warning: line 1: nodes above the free surface" in err
+    assert "z = 1 m" in err

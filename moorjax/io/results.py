@@ -3,11 +3,11 @@
 * netCDF: the dataset of :func:`moorjax.io.dataset.to_dataset` as it is
   (compressed; units and descriptions as attributes).
 * CSV: one header row of column names, then one comment row with their units,
-  then one row per output time (10 significant digits)::
+  then one row per output time (15 significant digits, shortest form)::
 
       t,L1_tension_a,L1_tension_b,P2_Fx,P2_Fy,P2_Fz
       # units: s,N,N,N,N,N
-      0,50561.3,49983.9,-49102.7,0,-9317.42
+      0.05,50561.2966240148,49983.9401225721,-49102.7172961372,0,-9317.4201234455
 
   Readers that skip ``#`` lines (``numpy.loadtxt``/``genfromtxt``, pandas with
   ``comment="#"``, ``moorjax fit --target``) see the columns of earlier versions.
@@ -66,7 +66,7 @@ def write_csv(ds, path) -> None:
     with open(path, "w") as f:
         f.write(",".join(c[0] for c in cols) + "\n")
         f.write("# units: " + ",".join(c[1] for c in cols) + "\n")
-        np.savetxt(f, np.column_stack([c[2] for c in cols]), delimiter=",", fmt="%.10g")
+        np.savetxt(f, np.column_stack([c[2] for c in cols]), delimiter=",", fmt="%.15g")
 
 
 def write_netcdf(ds, path) -> None:
