@@ -383,3 +383,22 @@ def test_statics_warns_of_a_fairlead_above_the_surface(tmp_path):
     assert rc == 0, err
     assert "moorjax statics: warning: line 1: nodes above the free surface" in err
     assert "z = 1 m" in err
+
+
+def test_stats_come_from_one_run(tmp_path, monkeypatch):
+    """--stats no longer simulates twice: one call, compile time from JAX's events."""
+    import moorjax.dynamics
+
+    calls = []
+    real = moorjax.dynamics.simulate
+
+    def counted(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(moorjax.dynamics, "simulate", counted)
+    rc, _, err = run("simulate", DECK, *BASE, "--stats", "--out", tmp_path / "s.nc")
+    assert rc == 0, err
+    stats = json.loads([ln for ln in err.splitlines() if ln.startswith("{")][0])
+    assert len(calls) == 1
+    assert stats["compile_s"] >= 0 and stats["run_s"] > 0 and stats["steps"] > 0
