@@ -48,6 +48,18 @@ def run(*argv):
     return rc, out.getvalue(), err.getvalue()
 
 
+def write_motion(path, t, x, z):
+    """A fairlead path with as many samples as the example's motion file (and
+    velocities), so that runs share the module's compilation."""
+    assert len(t) == 2401
+    h = 1e-6
+    vx, vz = (x(t + h) - x(t - h)) / (2 * h), (z(t + h) - z(t - h)) / (2 * h)
+    rows = np.column_stack([t, x(t), 0 * t, z(t), vx, 0 * t, vz])
+    np.savetxt(path, rows, delimiter=",", header="t,P2_x,P2_y,P2_z,P2_vx,P2_vy,P2_vz", comments="",
+               fmt="%.12g")
+    return path
+
+
 @pytest.fixture(scope="module")
 def example_run(tmp_path_factory):
     """The bundled example with its own motion, written as netCDF and CSV."""
@@ -140,17 +152,16 @@ def test_csv_header_units_and_numbers(example_run):
     assert lines[2].split(",")[0] in ("0", "0.1")  # the run's first time, written plainly
 
 
-def test_no_nodes_and_python_dataset(tmp_path):
-    """``--no-nodes`` leaves node variables out; in Python, ``to_dataset`` of a
-    ``simulate(save_nodes=True)`` result equals the CLI's file."""
+def test_python_dataset_and_no_nodes(example_run, tmp_path):
+    """In Python, ``to_dataset`` of ``simulate(save_nodes=True)`` equals the CLI's
+    file; writing with ``nodes=False`` (what ``--no-nodes`` does) leaves node
+    variables out. (--motion none, the held fairlead: tests/test_cli_simulate.py.)"""
     from moorjax.dynamics import simulate
-    from moorjax.io import build_scene, read_deck, read_deck_motion
+    from moorjax.io import build_scene, read_deck, read_deck_motion, write_results
     from moorjax.io.dataset import to_dataset
 
-    rc, _, err = run("simulate", DECK, *BASE, "--no-nodes", "--out", tmp_path / "a.nc")
-    assert rc == 0, err
-    slim = xr.open_dataset(tmp_path / "a.nc")
-    assert "node_position" not in slim and "segment_tension" not in slim
+    d, _ = example_run
+    cli_ds = xr.open_dataset(d / "run.nc")
     ex = example("taut_polyester")
     deck = read_deck(ex.deck)
     motion = read_deck_motion(ex.motion, deck)
@@ -158,28 +169,14 @@ def test_no_nodes_and_python_dataset(tmp_path):
     res = simulate(scene, 1.0, dt_out=0.1, save_nodes=True)
     ds = to_dataset(res, scene, deck=deck, motion=motion)
     assert isinstance(ds, xr.Dataset) and ds["node_position"].shape == (len(res.ts), 1, 7, 3)
-    np.testing.assert_allclose(ds["tension_b"].values, slim["tension_b"].values, rtol=1e-10)
-
-
-def test_motion_none_holds_the_fairlead(tmp_path):
-    rc, _, err = run("simulate", DECK, *BASE, "--motion", "none", "--out", tmp_path / "h.nc")
-    assert rc == 0, err
-    ds = xr.open_dataset(tmp_path / "h.nc")
-    assert np.ptp(ds["position_b"].values, axis=0).max() == 0.0
-    assert np.ptp(ds["tension_b"].values) < 1e-6 * float(ds["tension_b"].mean())
-
-
-def test_ensemble_writes_one_dataset(tmp_path):
-    out = tmp_path / "sweep"
-    rc, _, err = run("ensemble", DECK, *BASE, "--vary", "Cd=1.0,2.0", "--histories",
-                     "--chunk-size", "1", "--out", out)
-    assert rc == 0, err
-    ds = xr.open_dataset(out / "ensemble.nc")
-    assert ds.sizes["member"] == 2 and list(ds["Cd"].values) == [1.0, 2.0]
-    assert list(ds["status"].values) == ["ok", "ok"]
-    assert ds["tension_b"].dims == ("member", "time", "line")
-    assert ds["tension_b_max"].attrs["units"] == "N"
-    np.testing.assert_allclose(ds["tension_b_max"].values[:, 0], ds["tension_b"].max("time").values[:, 0])
+    for name in ("tension_b", "node_position", "segment_tension", "point_force"):
+        np.testing.assert_allclose(ds[name].values, cli_ds[name].values, rtol=1e-12)
+    write_results(ds, tmp_path / "slim.nc", nodes=False)
+    slim = xr.open_dataset(tmp_path / "slim.nc")
+    assert "node_position" not in slim and "segment_tension" not in slim and "tension_b" in slim
+    args = cli.build_parser().parse_args(["simulate", DECK, "--duration", "1", "--out", "x.nc",
+                                          "--no-nodes"])
+    assert args.no_nodes
 
 
 # ------------------------------------------------------------------ plots
@@ -241,7 +238,7 @@ def test_bad_plot_out_and_fit_out(tmp_path):
 
 def test_motion_starting_late_warns(tmp_path):
     m = tmp_path / "late.csv"
-    m.write_text("t,P2_x,P2_y,P2_z\n0.5,0,0,-5\n3,0.1,0,-5\n")
+    write_motion(m, 0.5 + np.arange(2401) * 0.25, lambda t: 0 * t, lambda t: -5.0 + 0 * t)
     rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--rtol", "2", "--out", tmp_path / "o.nc")
     # a bad option stops the run before any work, after checks of the motion
     assert rc == 2 and "rtol" in err
@@ -253,10 +250,7 @@ def test_motion_starting_late_warns(tmp_path):
 def test_fairlead_above_the_surface_warns(tmp_path):
     """A fairlead lifted from z = -5 m to +1 m: warned once, with time and line."""
     m = tmp_path / "lift.csv"
-    t = np.linspace(0.0, 1.0, 11)
-    z = -5.0 + 6.0 * t
-    np.savetxt(m, np.column_stack([t, 0 * t, 0 * t, z]), delimiter=",", header="t,P2_x,P2_y,P2_z",
-               comments="")
+    write_motion(m, np.arange(2401) * 0.25, lambda t: 0 * t, lambda t: -5.0 + 6.0 * np.minimum(t, 1.0))
     rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--out", tmp_path / "o.nc")
     assert rc == 0, err
     lines = [ln for ln in err.splitlines() if "free surface" in ln]
@@ -337,20 +331,37 @@ def test_help_has_defaults_examples_and_no_markup():
         assert frag in " ".join(sim.split()), frag
 
 
-def test_fit_json_names_the_optimiser(tmp_path):
-    """The JSON says ``lbfgs``/``adam`` (as given), not optax's class name; 0 steps
-    and no covariance keep it to one loss evaluation."""
+def test_fit_json_names_the_optimiser(tmp_path, monkeypatch):
+    """The JSON says ``lbfgs``/``adam`` as given, not optax's class name. The fit
+    itself is replaced by a stand-in (fits are tested in tests/test_identify.py);
+    what runs is the CLI's reading of the files and writing of the JSON."""
+    import importlib
+    import types
+
+    fit_module = importlib.import_module("moorjax.identify.fit")  # the package exports fit()
+
+    def fake_fit(exp, free, optimizer=None, callback=None, **kw):
+        callback(1, {"L1.Cd_normal": 1.5}, 2.0)
+        names = [f.name for f in free]
+        return types.SimpleNamespace(
+            to_json=lambda: dict(params={n: {} for n in names},
+                                 settings=dict(optimizer="GradientTransformationExtraArgs")),
+            initial={n: 1.6 for n in names}, values={n: 1.5 for n in names}, initial_loss=3.0,
+            final_loss=2.0, iterations=1, status="converged", message="")
+
+    monkeypatch.setattr(fit_module, "fit", fake_fit)
     d = tmp_path
-    rc, _, err = run("simulate", DECK, *BASE, "--out", d / "target.csv")
-    assert rc == 0, err
     motion = d / "motion.csv"
     rows = sample(example("taut_polyester"), np.linspace(0.0, 1.0, 11))
     np.savetxt(motion, rows, delimiter=",", header="t,P2_x,P2_y,P2_z,P2_vx,P2_vy,P2_vz", comments="")
-    rc, _, err = run("fit", DECK, "--target", d / "target.csv", "--params", "Cd_normal",
-                     "--motion", motion, "--segments", "6", "--steps", "0", "--no-covariance", "--dt", "0.05",
-                     "--out", d / "fit.json")
-    assert rc == 0, err
-    assert json.loads((d / "fit.json").read_text())["settings"]["optimizer"] == "lbfgs"
+    (d / "target.csv").write_text("t,L1_tension_b\n# units: s,N\n" +
+                                  "".join(f"{t:g},{5e4 + t}\n" for t in np.linspace(0.0, 1.0, 11)))
+    for opt in ("lbfgs", "adam"):
+        rc, _, err = run("fit", DECK, "--target", d / "target.csv", "--params", "Cd_normal",
+                         "--motion", motion, "--segments", "6", "--optimizer", opt,
+                         "--out", d / "fit.json")
+        assert rc == 0, err
+        assert json.loads((d / "fit.json").read_text())["settings"]["optimizer"] == opt
 
 
 # ------------------------------------------------------------------ progress
