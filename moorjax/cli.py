@@ -374,6 +374,8 @@ def _dynamics_options(d):
 def _exit_code(exc: BaseException) -> int:
     if isinstance(exc, MemoryError):
         return EXIT_RESOURCES
+    if isinstance(exc, ImportError):  # an optional dependency is missing
+        return EXIT_INPUT
     if isinstance(exc, OSError):
         if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.ENOMEM, errno.EMFILE, errno.ENFILE):
             return EXIT_RESOURCES
@@ -415,7 +417,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"\nmoorjax {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except (ValueError, RuntimeError, OSError, MemoryError) as exc:
+    except (ValueError, RuntimeError, OSError, MemoryError, ImportError) as exc:
         print(f"moorjax {args.command}: error: {_message(exc)}", file=sys.stderr)
         return _exit_code(exc)
     finally:

@@ -213,6 +213,15 @@ def test_plot_statics_and_python_functions(tmp_path, example_run):
     assert any(ln.get_label() == "seabed" and ln.get_ydata()[0] == -80.0 for ln in ax.lines)
 
 
+def test_plot_without_matplotlib_says_how_to_install(example_run, monkeypatch, tmp_path):
+    d, _ = example_run
+    for name in [m for m in sys.modules if m == "matplotlib" or m.startswith("matplotlib.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import fails
+    rc, _, err = run("plot", d / "run.nc", "--out", tmp_path / "x.png")
+    assert rc == 2 and 'pip install "moorjax[plot]"' in err and "Traceback" not in err
+
+
 # ------------------------------------------------------------------ checks first
 
 

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 
-def pyplot():
+def pyplot(headless: bool = False):
+    """``matplotlib.pyplot`` (with ``headless``, on the file-only Agg backend, as
+    the command line uses it)."""
     try:
         import matplotlib
 
-        if matplotlib.get_backend().lower() not in ("agg",) and not _interactive():
+        if headless:
             matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
@@ -15,9 +17,3 @@ def pyplot():
             "plotting needs matplotlib: pip install \"moorjax[plot]\" (or pip install matplotlib)"
         ) from None
     return plt
-
-
-def _interactive() -> bool:
-    import sys
-
-    return "ipykernel" in sys.modules or hasattr(sys, "ps1")

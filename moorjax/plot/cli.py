@@ -70,7 +70,7 @@ def cmd_plot(args) -> int:
             times = [float(x) for x in args.times.split(",")]
         except ValueError:
             raise ValueError(f"--times {args.times!r}: expected numbers in s, e.g. 0,2.5,5") from None
-    pyplot()  # a clear message now if matplotlib is missing
+    pyplot(headless=True)  # a clear message now if matplotlib is missing
     ds = read_results(args.run)
     line = _label(args.line)
     if line is not None and line not in list(ds["line"].values):
@@ -95,7 +95,7 @@ def cmd_plot_statics(args) -> int:
     from ._mpl import pyplot
 
     _figure_path(args.out)
-    pyplot()
+    pyplot(headless=True)
     _, scene, _ = _load(args)
     sols = []
     for line in scene.lines:
