@@ -8,6 +8,8 @@ should be float64.
 Units are SI throughout; z is up with z = 0 at the free surface.
 """
 
+__version__ = "0.1.0"
+
 import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)

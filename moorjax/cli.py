@@ -1,26 +1,71 @@
-"""The ``moorjax`` command line: statics and simulation of MoorDyn decks.
+"""The ``moorjax`` command line: statics, simulation, ensembles, fits and plots of
+MoorDyn decks. ``main(argv)`` returns the exit code; ``run()`` is the console
+entry point (exit codes, one-line warnings, Ctrl-C).
 
-    moorjax statics DECK [--segments N] [--json]
-    moorjax simulate DECK --duration T [--motion MOTION.csv] [--segments N]
-        [--solver NAME] [--rtol R] [--atol A] [--atol-velocity AV] [--dt DT] [--dt-out 0.05]
-        --out OUT.csv [--stats]
-    moorjax ensemble DECK --duration T [--motion MOTION.csv] --vary NAME=v1,v2,...
-        [--vary ...] --out DIR [--histories] [--chunk-size K] [simulate options]
-    moorjax fit DECK --motion MOTION.csv --target TARGET.csv --params Cd_normal,Cd_axial[,...]
-        [--line ID] [--steps K] --out FIT.json
-    moorjax examples
-
-DECK is a MoorDyn v2 input file or ``example:NAME`` for a bundled deck.
+Exit codes: 0 success, 2 bad input or usage, 3 the numerics failed (a static
+solve or time integration did not converge, a fit's loss became non-finite),
+4 out of memory or another resource (disk full), 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
+import re
 import sys
 import time
+import warnings
 
 import numpy as np
+
+from . import __version__
+
+EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
+
+DESCRIPTION = ("moorjax: statics and time-domain simulation of mooring lines from MoorDyn v2 "
+               "decks (differentiable, on JAX).")
+EPILOG = """\
+DECK is a MoorDyn v2 input file or example:NAME for a bundled deck (moorjax examples).
+
+quick start:
+  moorjax statics example:oc3_catenary --json
+  moorjax simulate example:oc3_catenary --duration 60 --out run.nc
+  moorjax plot run.nc --out run.png
+
+exit codes: 0 ok, 2 bad input or usage, 3 the numerics failed, 4 out of memory or
+another resource, 130 interrupted. 'moorjax COMMAND --help' shows each command's options."""
+
+
+class HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the epilog's layout and appends defaults that mean something."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if "%(default)" in text or "default" in text:
+            return text
+        if action.option_strings and not any(action.default is v for v in (None, False, True)) \
+                and action.default != argparse.SUPPRESS:
+            text += " (default: %(default)s)"
+        return text
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    def error(self, message):
+        self.print_usage(sys.stderr)
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {clip(message)}\n")
+
+
+def clip(text: str, longest: int = 80) -> str:
+    """``text`` with every token longer than ``longest`` characters shortened."""
+    def short(m):
+        tok = m.group(0)
+        return f"{tok[:40]}…[{len(tok) - 50} more characters]…{tok[-10:]}"
+    text = re.sub(rf"\S{{{longest + 1},}}", short, str(text))
+    return text if len(text) <= 2000 else text[:2000] + f"… [{len(text) - 2000} more characters]"
+
+
+# ------------------------------------------------------------------ loading
 
 
 def _deck_path(arg: str) -> str:
@@ -29,6 +74,18 @@ def _deck_path(arg: str) -> str:
 
         return example_path(arg.split(":", 1)[1])
     return arg
+
+
+def _motion_path(args) -> str | None:
+    """--motion, or a bundled example's own motion; ``none`` holds the coupled points."""
+    motion = getattr(args, "motion", None)
+    if motion is not None:
+        return None if motion.lower() == "none" else motion
+    if args.deck.startswith("example:"):
+        from .examples import example_motion_path
+
+        return example_motion_path(args.deck.split(":", 1)[1])
+    return None
 
 
 def _load(args, motion_path=None):
@@ -57,6 +114,12 @@ def cmd_statics(args) -> int:
                 f"(max force imbalance {float(st.max_residual):.3g} N after "
                 f"{int(st.iterations)} Newton iterations)"
             )
+        z_top = float(np.max(np.asarray(st.positions)[:, 2]))
+        if z_top > 0.0:
+            warnings.warn(
+                f"line {line.label}: nodes above the free surface at equilibrium (highest "
+                f"z = {z_top:.4g} m); moorjax has no free-surface model, so buoyancy acts "
+                "there as if submerged")
         rows.append(
             dict(
                 id=int(line.label) if line.label.isdigit() else line.label,
@@ -82,78 +145,119 @@ def cmd_statics(args) -> int:
     return 0
 
 
+def _settings(args) -> dict:
+    return dict(solver=args.solver, rtol=args.rtol, atol=args.atol,
+                atol_velocity=args.atol_velocity, dt=args.dt, dt_out=args.dt_out)
+
+
 def _load_for_dynamics(args, with_motion=False):
     """Deck, scene and simulate() keyword arguments from the shared options
-    (and the motion read, with ``with_motion``)."""
+    (and the motion read, with ``with_motion``). Every option is checked here,
+    before anything is compiled."""
+    from .dynamics.simulate import plan
+
     if not (np.isfinite(args.duration) and args.duration > 0):
         raise ValueError(f"--duration = {args.duration} s must be > 0")
-    deck, scene, motion = _load(args, args.motion)
+    if not np.isfinite(args.t0):
+        raise ValueError(f"--t0 = {args.t0} s must be finite")
+    kwargs = _settings(args)
+    motion_path = _motion_path(args)
+    deck, scene, motion = _load(args, motion_path)
     if motion is not None:
-        _check_motion_covers(args.motion, motion.t, args.duration)
-    kwargs = dict(
-        solver=args.solver,
-        rtol=args.rtol,
-        atol=args.atol,
-        atol_velocity=args.atol_velocity,
-        dt=args.dt,
-        dt_out=args.dt_out,
-    )
+        _check_motion_covers(motion_path, motion.t, args.t0, args.t0 + args.duration)
+    plan(args.duration, t0=args.t0, **kwargs)  # raises ValueError naming a bad setting
+    kwargs["t0"] = args.t0
     return (deck, scene, kwargs, motion) if with_motion else (deck, scene, kwargs)
 
 
-def _check_motion_covers(path, t, duration):
-    """The motion must cover the run, t = 0 to ``duration`` [s]: a ValueError
-    naming the file and both time spans otherwise (no point is ever held still)."""
-    tol = 1e-9 * max(1.0, duration)
-    if t[0] > tol or t[-1] < duration - tol:
+def _check_motion_covers(path, t, t0, t_end):
+    """The motion must cover the run, t0 to t_end [s]: a ValueError naming the
+    file and both time spans otherwise (no point is ever held still)."""
+    tol = 1e-9 * max(1.0, abs(t_end))
+    if t[0] > t0 + tol or t[-1] < t_end - tol:
         raise ValueError(
             f"{path}: the motion covers t = {t[0]:.10g} to {t[-1]:.10g} s but the run needs "
-            f"t = 0 to {duration:.10g} s (--duration); give the motion from t = 0 to at least "
-            f"{duration:.10g} s (to hold a point still, add rows at its last position with "
-            "zero velocity) or shorten --duration"
+            f"t = {t0:.10g} to {t_end:.10g} s (--t0, --duration); give the motion over at least "
+            "that span (to hold a point still, add rows at its last position with zero "
+            "velocity) or shorten --duration"
         )
+
+
+class _CompileTimer:
+    """Seconds JAX spends tracing, lowering and compiling while active, from its
+    monitoring events, so --stats needs no second run. Nested jits report
+    nested spans; their union is counted once."""
+
+    EVENTS = ("/jax/core/compile/jaxpr_trace_duration",
+              "/jax/core/compile/jaxpr_to_mlir_module_duration",
+              "/jax/core/compile/backend_compile_duration")
+
+    def __init__(self):
+        self.spans = []
+
+    def _listen(self, event, duration, **_):
+        if event in self.EVENTS:
+            end = time.perf_counter()
+            self.spans.append((end - duration, end))
+
+    @property
+    def seconds(self) -> float:
+        total, reach = 0.0, -np.inf
+        for lo, hi in sorted(self.spans):
+            if hi > reach:
+                total += hi - max(lo, reach)
+                reach = hi
+        return total
+
+    def __enter__(self):
+        import jax.monitoring
+
+        jax.monitoring.register_event_duration_secs_listener(self._listen)
+        return self
+
+    def __exit__(self, *exc):
+        import jax.monitoring
+
+        jax.monitoring.unregister_event_duration_listener(self._listen)
 
 
 def cmd_simulate(args) -> int:
     import jax
 
+    from ._progress import Progress, enabled
     from .dynamics import simulate
-    from .io import coupled_body_ids, coupled_point_ids
+    from .io.dataset import to_dataset
+    from .io.plausibility import check_run
+    from .io.results import check_output, write_results
 
+    check_output(args.out)
     deck, scene, kwargs, motion = _load_for_dynamics(args, with_motion=True)
-    t0 = time.perf_counter()
-    res = simulate(scene, args.duration, **kwargs)
-    jax.block_until_ready(res.tension_b)
-    t1 = time.perf_counter()
-    res = simulate(scene, args.duration, **kwargs) if args.stats else res
-    jax.block_until_ready(res.tension_b)
-    t2 = time.perf_counter()
+    prog = Progress("simulate", enabled(args.quiet))
+    prog.say(f"{len(scene.lines)} line(s), {sum(ln.n_segments for ln in scene.lines)} segments, "
+             f"{args.duration:g} s; compiling (tens of seconds the first time)…")
+    t_start = time.perf_counter()
+    with _CompileTimer() as timer, prog.meter(args.t0, args.duration):
+        res = simulate(scene, args.duration, save_nodes=not args.no_nodes,
+                       progress=prog.on, **kwargs)
+        jax.block_until_ready(res.tension_b)
+    wall = time.perf_counter() - t_start
     res = jax.device_get(res)
-
-    ids = [ln.label for ln in scene.lines]
-    point_ids = coupled_point_ids(deck)
-    cols = ["t"]
-    data = [np.asarray(res.ts)]
-    for j, lid in enumerate(ids):
-        cols += [f"L{lid}_tension_a", f"L{lid}_tension_b"]
-        data += [res.tension_a[:, j], res.tension_b[:, j]]
-    for pid in point_ids:
-        total = np.zeros((len(res.ts), 3))
-        for j, dl in enumerate(deck.lines):
-            if dl.point_a == pid:
-                total += res.force_a[:, j]
-            if dl.point_b == pid:
-                total += res.force_b[:, j]
-        cols += [f"P{pid}_Fx", f"P{pid}_Fy", f"P{pid}_Fz"]
-        data += [total[:, 0], total[:, 1], total[:, 2]]
-    for bid in coupled_body_ids(deck):
-        cols += [f"B{bid}_{c}" for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
-        data += list(_body_loads(deck, scene, motion, res, bid).T)
-    np.savetxt(args.out, np.column_stack(data), delimiter=",", header=",".join(cols), comments="")
+    prog.say(f"{args.duration:g} s simulated in {wall:.1f} s: {int(res.num_steps)} steps "
+             f"({int(res.num_rejected_steps)} rejected)")
+    settings = dict(kwargs, duration=args.duration, segments=args.segments,
+                    save_nodes=not args.no_nodes)
+    ds = to_dataset(res, scene, deck=deck, motion=motion, attrs=dict(
+        deck=args.deck, deck_text=_deck_text(args.deck), motion=_motion_path(args) or "none",
+        settings=settings, history=_command_line(args),
+    ))
+    for msg in check_run(ds):
+        warnings.warn(msg)
+    write_results(ds, args.out, nodes=not args.no_nodes)
+    prog.say(f"wrote {args.out}")
     if args.stats:
         stats = dict(
-            compile_s=(t1 - t0) - (t2 - t1),
-            run_s=t2 - t1,
+            compile_s=timer.seconds,
+            run_s=wall - timer.seconds,
             steps=int(res.num_steps),
             rejected_steps=int(res.num_rejected_steps),
             accepted_steps=int(res.num_accepted_steps),
@@ -163,82 +267,21 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _body_loads(deck, scene, motion, res, body_id):
-    """(k, 6) force [N] and moment about the body's reference point [N·m] (global
-    axes) of the lines on a coupled body, at the output times."""
-    import jax
-
-    from .io import body_reference_end
-
-    ts = np.asarray(res.ts)
-    ref = np.asarray(jax.vmap(body_reference_end(deck, body_id, motion).position)(ts))
-    out = np.zeros((len(ts), 6))
-    for j, dl in enumerate(deck.lines):
-        for name, pid, force in (("a", dl.point_a, res.force_a), ("b", dl.point_b, res.force_b)):
-            if deck.points[pid].body != body_id:
-                continue
-            end = getattr(scene.lines[j], f"end_{name}")
-            r = np.asarray(jax.vmap(end.position)(ts))
-            f = np.asarray(force[:, j])
-            out[:, :3] += f
-            out[:, 3:] += np.cross(r - ref, f)
-    return out
+def _deck_text(deck_arg) -> str:
+    with open(_deck_path(deck_arg), encoding="utf-8", errors="replace") as f:
+        return f.read()
 
 
-def cmd_ensemble(args) -> int:
-    import os
-
-    from .ensemble.store import SUMMARY_STATS, run_chunked
-    from .ensemble.vary import parse_vary, sweep
-
-    varies = [parse_vary(v) for v in args.vary]  # names checked before any work
-    _, scene, kwargs = _load_for_dynamics(args)
-    members, table = sweep(scene, varies)
-    t0 = time.perf_counter()
-    data = run_chunked(
-        members, args.out, args.duration, chunk_size=args.chunk_size,
-        histories=args.histories, **kwargs,
-    )
-    wall = time.perf_counter() - t0
-    ids = [ln.label for ln in scene.lines]
-    names = [n for n, _ in varies]
-    cols = ["member"] + names + ["status", "steps"]
-    for j, lid in enumerate(ids):
-        for end in ("tension_a", "tension_b"):
-            cols += [f"L{lid}_{end}_{st}" for st in SUMMARY_STATS]
-    with open(os.path.join(args.out, "summary.csv"), "w") as f:
-        f.write(",".join(cols) + "\n")
-        for i, row in enumerate(table):
-            vals = [str(i)] + [repr(row[n]) for n in names]
-            vals += [str(data["status"][i]), str(int(data["num_steps"][i]))]
-            for j in range(len(ids)):
-                for end in ("tension_a", "tension_b"):
-                    vals += [f"{data[f'stat_{end}_{st}'][i, j]:.9g}" for st in SUMMARY_STATS]
-            f.write(",".join(vals) + "\n")
-    if args.histories:
-        hdir = os.path.join(args.out, "histories")
-        os.makedirs(hdir, exist_ok=True)
-        hcols = ["t"] + [f"L{lid}_{end}" for lid in ids for end in ("tension_a", "tension_b")]
-        for i in range(len(table)):
-            cols_i = [data["ts"]]
-            for j in range(len(ids)):
-                cols_i += [data["tension_a"][i, :, j], data["tension_b"][i, :, j]]
-            np.savetxt(os.path.join(hdir, f"member_{i:05d}.csv"), np.column_stack(cols_i),
-                       delimiter=",", header=",".join(hcols), comments="")
-    n_bad = int(np.sum(data["status"] != "ok"))
-    print(
-        f"{len(table)} members in {wall:.1f} s; {n_bad} failed; summary: "
-        f"{os.path.join(args.out, 'summary.csv')}",
-        file=sys.stderr,
-    )
-    return 0
+def _command_line(args) -> str:
+    return "moorjax " + " ".join(getattr(args, "argv", []) or [args.command])
 
 
 def cmd_examples(args) -> int:
-    from .examples import EXAMPLES, example_path
+    from .examples import EXAMPLES, example
 
     for name in EXAMPLES:
-        print(f"example:{name}\t{example_path(name)}")
+        ex = example(name)
+        print(f"example:{name}\t{ex.shows}\n    deck:   {ex.deck}\n    motion: {ex.motion}")
     return 0
 
 
@@ -246,46 +289,59 @@ def _positive_int(text):
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {clip(repr(text))}")
     if v < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {v}")
     return v
 
 
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="moorjax", description=__doc__.split("\n")[0])
-    sub = p.add_subparsers(dest="command", required=True)
+def _sub(sub, name, help, example, **kw):
+    return sub.add_parser(name, help=help, description=help[0].upper() + help[1:] + ".",
+                          epilog=f"example:\n  {example}", formatter_class=HelpFormatter, **kw)
 
-    s = sub.add_parser("statics", help="static equilibrium of every line of a deck")
+
+def build_parser() -> argparse.ArgumentParser:
+    p = ArgumentParser(prog="moorjax", description=DESCRIPTION, epilog=EPILOG,
+                       formatter_class=HelpFormatter)
+    p.add_argument("--version", action="version", version=f"moorjax {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                           parser_class=ArgumentParser)
+
+    s = _sub(sub, "statics", "static equilibrium of every line of a deck",
+             "moorjax statics example:oc3_catenary --json")
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
-    s.add_argument("--segments", type=_positive_int, help="override every line's segment count")
+    s.add_argument("--segments", type=_positive_int,
+                   help="override every line's segment count (default: the deck's)")
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
     s.set_defaults(func=cmd_statics)
 
-    d = sub.add_parser("simulate", help="time-domain simulation of a deck")
+    d = _sub(sub, "simulate", "time-domain simulation of a deck",
+             "moorjax simulate example:oc3_catenary --duration 60 --segments 40 --out run.nc")
     _dynamics_options(d)
-    d.add_argument("--out", required=True, help="output CSV")
-    d.add_argument("--stats", action="store_true", help="print one JSON line of statistics to stderr")
+    d.add_argument("--out", required=True,
+                   help="output file: .nc (netCDF: tensions, forces, node positions, segment "
+                        "tensions, units) or .csv (tensions and forces)")
+    d.add_argument("--no-nodes", action="store_true",
+                   help="leave node positions and segment tensions out (huge runs)")
+    d.add_argument("--stats", action="store_true",
+                   help="print one JSON line of statistics to stderr (compile and run time "
+                        "measured in the same run)")
     d.set_defaults(func=cmd_simulate)
 
-    en = sub.add_parser("ensemble", help="parameter sweep of a deck as one vmapped ensemble")
-    _dynamics_options(en)
-    en.add_argument(
-        "--vary", action="append", required=True, metavar="NAME=v1,v2,...",
-        help="parameter values (repeatable; members are all combinations). Names: "
-        "EA, BA, Cd, CdAx, Ca, CaAx, d, mass, length (optionally L<id>.NAME for one line), "
-        "depth, rho, kBot, cBot",
-    )
-    en.add_argument("--out", required=True, help="output directory (resumed if it exists)")
-    en.add_argument("--histories", action="store_true", help="also write each member's tension history")
-    en.add_argument("--chunk-size", type=_positive_int, default=100, help="members per compiled batch")
-    en.set_defaults(func=cmd_ensemble)
+    from .ensemble.cli import add_parser as add_ensemble_parser
+
+    add_ensemble_parser(sub)
 
     from .identify.cli import add_parser as add_fit_parser
 
     add_fit_parser(sub)
 
-    e = sub.add_parser("examples", help="list the bundled example decks")
+    from .plot.cli import add_parsers as add_plot_parsers
+
+    add_plot_parsers(sub)
+
+    e = _sub(sub, "examples", "list the bundled examples (deck, motion, what each shows)",
+             "moorjax examples")
     e.set_defaults(func=cmd_examples)
     return p
 
@@ -296,14 +352,15 @@ def _dynamics_options(d):
 
     d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
+    d.add_argument("--t0", type=float, default=0.0, help="start time [s] (static equilibrium there)")
     d.add_argument("--motion", help="CSV of coupled-point and coupled-body motion "
-                   "(t, P<id>_x, ..., B<id>_x, ..., B<id>_roll [rad], ...)")
-    d.add_argument("--segments", type=_positive_int, help="override every line's segment count")
+                   "(t, P<id>_x, ..., B<id>_x, ..., B<id>_roll [rad], ...); 'none' holds "
+                   "them still (default: an example's own motion, else none)")
+    d.add_argument("--segments", type=_positive_int,
+                   help="override every line's segment count (default: the deck's)")
     d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
-    d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance (default 1e-5)")
-    d.add_argument(
-        "--atol", type=float, default=1e-4, help="absolute tolerance of positions [m] (default 1e-4)"
-    )
+    d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
+    d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")
     d.add_argument(
         "--atol-velocity",
         type=float,
@@ -311,16 +368,75 @@ def _dynamics_options(d):
     )
     d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
     d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
+    d.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress on stderr (it is off anyway when stderr is not a terminal)")
+
+
+# ------------------------------------------------------------------ running
+
+
+def _exit_code(exc: BaseException) -> int:
+    if isinstance(exc, MemoryError):
+        return EXIT_RESOURCES
+    if isinstance(exc, ImportError):  # an optional dependency is missing
+        return EXIT_INPUT
+    if isinstance(exc, OSError):
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.ENOMEM, errno.EMFILE, errno.ENFILE):
+            return EXIT_RESOURCES
+        return EXIT_INPUT
+    text = str(exc)
+    if "RESOURCE_EXHAUSTED" in text or "Out of memory" in text or "out of memory" in text:
+        return EXIT_RESOURCES
+    if isinstance(exc, ValueError):
+        return EXIT_INPUT
+    return EXIT_NUMERICS
+
+
+def _message(exc: BaseException) -> str:
+    if _exit_code(exc) == EXIT_RESOURCES and not isinstance(exc, OSError):
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        return (f"out of memory ({clip(first, 200)}); use fewer segments, a shorter run, "
+                "--no-nodes or a smaller --chunk-size")
+    if isinstance(exc, OSError) and exc.filename is not None:
+        return clip(f"{exc.filename}: {exc.strerror or exc}")
+    return clip(str(exc))
+
+
+def _format_warning(command):
+    def fmt(message, category, filename, lineno, line=None):
+        name = "warning" if category in (UserWarning, RuntimeWarning) else category.__name__
+        return f"moorjax {command}: {name}: {clip(str(message))}\n"
+    return fmt
 
 
 def main(argv=None) -> int:
+    """Run the command line on ``argv`` and return the exit code (see the module notes)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = build_parser().parse_args(argv)
+    args.argv = argv
+    saved = warnings.formatwarning
+    warnings.formatwarning = _format_warning(args.command)
     try:
         return args.func(args)
-    except (ValueError, RuntimeError, OSError) as exc:
-        print(f"moorjax {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    except KeyboardInterrupt:
+        print(f"\nmoorjax {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (ValueError, RuntimeError, OSError, MemoryError, ImportError) as exc:
+        print(f"moorjax {args.command}: error: {_message(exc)}", file=sys.stderr)
+        return _exit_code(exc)
+    finally:
+        warnings.formatwarning = saved
+
+
+def run() -> None:  # pragma: no cover - the console entry point
+    """``moorjax`` and ``python -m moorjax``: :func:`main`, exiting with its code."""
+    try:
+        code = main()
+    except KeyboardInterrupt:  # while parsing or importing
+        print("\nmoorjax: interrupted", file=sys.stderr)
+        code = EXIT_INTERRUPTED
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()

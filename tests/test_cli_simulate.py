@@ -59,11 +59,12 @@ def surge(t):
 
 @pytest.fixture(scope="module")
 def held_run(tmp_path_factory):
-    """One run without --motion, with --stats: (exit code, csv path, stderr)."""
+    """One run with ``--motion none`` (the bundled example's own motion is the
+    default), with --stats: (exit code, csv path, stderr)."""
     out = tmp_path_factory.mktemp("held") / "out.csv"
     err = io.StringIO()
     with contextlib.redirect_stderr(err):
-        rc = main(sim_args(out, "--stats"))
+        rc = main(sim_args(out, "--stats", "--motion", "none"))
     return rc, out, err.getvalue()
 
 

@@ -176,6 +176,15 @@ def test_cli_ensemble_summary_and_bad_vary(tmp_path, capsys):
     tmax = [float(r.split(",")[rows[0].split(",").index("L1_tension_b_max")]) for r in rows[1:]]
     assert tmax[1] > tmax[0]  # stiffer line, higher static tension
     assert len(list((out / "histories").iterdir())) == 4
+    # the same as one dataset with a member dimension (units as attributes)
+    import xarray as xr
+
+    ds = xr.open_dataset(out / "ensemble.nc")
+    assert ds.sizes["member"] == 4 and list(ds["Cd"].values) == [1.2, 1.2, 2.0, 2.0]
+    assert list(ds["status"].values) == ["ok"] * 4
+    assert ds["tension_b"].dims == ("member", "time", "line") and ds["tension_b_max"].attrs["units"] == "N"
+    np.testing.assert_allclose(ds["tension_b_max"].values[:, 0], [float(v) for v in tmax])
+    np.testing.assert_allclose(ds["tension_b_max"].values, ds["tension_b"].max("time").values)
     capsys.readouterr()
     for vary, msg in (("Foo=1", "valid names"), ("Cd=abc", "not a number"),
                       ("EA=-1", "must be finite and > 0"), ("L7.Cd=1", "no line 7"),

@@ -22,9 +22,18 @@ def add_parser(subparsers):
     """Add the ``fit`` sub-command to an ``argparse`` sub-parser collection."""
     from ..dynamics.solvers import SOLVERS
 
-    f = subparsers.add_parser("fit", help="fit line parameters to a measured tension history")
+    from ..cli import HelpFormatter
+
+    f = subparsers.add_parser(
+        "fit", help="fit line parameters to a measured tension history",
+        description="Fit line parameters to a measured tension history.",
+        formatter_class=HelpFormatter,
+        epilog="example:\n  moorjax fit example:oc3_catenary --target run.csv --params Cd_normal "
+               "--segments 10 --steps 5 --out fit.json",
+    )
     f.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
-    f.add_argument("--motion", required=True, help="CSV of coupled-point motion (t, P<id>_x, ...)")
+    f.add_argument("--motion", required=True,
+                   help="CSV of coupled-point motion (t, P<id>_x, ...) over the target's time span")
     f.add_argument("--target", required=True,
                    help="CSV of measured tensions: t, L<id>_tension_a/_b (moorjax simulate columns)")
     f.add_argument("--params", required=True, metavar="NAME[,NAME...]",
@@ -35,7 +44,7 @@ def add_parser(subparsers):
     f.add_argument("--start", action="append", default=[], metavar="NAME=VALUE",
                    help="start value of a free parameter (default: the deck's value); repeatable")
     f.add_argument("--window", metavar="T0,T1", help="only samples with T0 <= t <= T1 [s] count")
-    f.add_argument("--segments", type=int, help="override every line's segment count")
+    f.add_argument("--segments", type=int, help="override every line's segment count (default: the deck's)")
     f.add_argument("--dt", type=float, default=0.01, help="fixed time step [s] (default 0.01)")
     f.add_argument("--solver", default="kvaerno3", choices=SOLVERS, help="time stepper (default kvaerno3)")
     f.add_argument("--rtol", type=float, default=1e-6, help="Newton relative tolerance (default 1e-6)")
@@ -45,6 +54,8 @@ def add_parser(subparsers):
     f.add_argument("--learning-rate", type=float, default=0.05, help="adam learning rate (default 0.05)")
     f.add_argument("--no-covariance", action="store_true", help="skip the Gauss-Newton covariance")
     f.add_argument("--out", required=True, help="output JSON")
+    f.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress on stderr (it is off anyway when stderr is not a terminal)")
     f.set_defaults(func=cmd_fit)
     return f
 
@@ -100,7 +111,9 @@ def _parse_window(text):
 def cmd_fit(args) -> int:
     import optax
 
+    from .._progress import Progress, enabled
     from ..cli import _deck_path
+    from ..io.results import check_output
     from .experiment import load_experiment
     from .fit import default_optimizer, fit
     from .free import Free
@@ -109,10 +122,12 @@ def cmd_fit(args) -> int:
         raise ValueError(f"--steps = {args.steps} must be >= 0")
     if args.segments is not None and args.segments < 1:
         raise ValueError(f"--segments = {args.segments} must be >= 1")
+    check_output(args.out, (".json",))
+    motion = args.motion
     given, names = _parse_params(args.params, args.line)
     starts = _parse_start(args.start, names, args.line)
     exp = load_experiment(
-        _deck_path(args.deck), args.motion, args.target, segments=args.segments,
+        _deck_path(args.deck), motion, args.target, segments=args.segments,
         line=args.line, window=_parse_window(args.window),
     )
     free = [Free(n, starts.get(n)) for n in names]
@@ -120,13 +135,22 @@ def cmd_fit(args) -> int:
         opt = optax.adam(args.learning_rate)
     else:
         opt = default_optimizer()
+    prog = Progress("fit", enabled(args.quiet))
+    prog.say(f"{len(names)} parameter(s), up to {args.steps} steps; compiling the simulation and "
+             "its gradient (a minute or more)…")
+
+    def report(it, values, loss):
+        vals = ", ".join(f"{k} {v:.6g}" for k, v in values.items())
+        prog.say(f"step {it}/{args.steps}: loss {loss:.6g}; {vals} ({prog.elapsed():.0f} s)")
+
     res = fit(
         exp, free, optimizer=opt, steps=args.steps, dt=args.dt, solver=args.solver,
-        rtol=args.rtol, atol=args.atol, covariance=not args.no_covariance,
+        rtol=args.rtol, atol=args.atol, covariance=not args.no_covariance, callback=report,
     )
     out = res.to_json()
     out["params"] = {g: out["params"][n] for g, n in zip(given, names)}
-    out.update(deck=args.deck, motion=args.motion, target=args.target,
+    out["settings"]["optimizer"] = args.optimizer
+    out.update(deck=args.deck, motion=motion, target=args.target,
                channels=list(exp.names), line=args.line)
     out["settings"].update(segments=args.segments, window=_parse_window(args.window))
     with open(args.out, "w") as fh:

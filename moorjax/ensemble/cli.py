@@ -1,0 +1,106 @@
+"""``moorjax ensemble``: a parameter sweep of a deck as chunked, vmapped batches
+(``DIR/summary.csv``, ``DIR/ensemble.nc``, optional histories; resumable)."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from ..cli import _dynamics_options, _load_for_dynamics, _motion_path, _command_line
+
+
+def add_parser(subparsers):
+    """Add the ``ensemble`` sub-command to an ``argparse`` sub-parser collection."""
+    from ..cli import _positive_int, _sub
+
+    en = _sub(subparsers, "ensemble", "parameter sweep of a deck as one vmapped ensemble",
+              "moorjax ensemble example:taut_polyester --duration 20 --segments 20 "
+              "--vary Cd=1.2,1.6,2.0 --out sweep")
+    _dynamics_options(en)
+    en.add_argument(
+        "--vary", action="append", required=True, metavar="NAME=v1,v2,...",
+        help="parameter values (repeatable; members are all combinations). Names: "
+        "EA, BA, Cd, CdAx, Ca, CaAx, d, mass, length (optionally L<id>.NAME for one line), "
+        "depth, rho, kBot, cBot",
+    )
+    en.add_argument("--out", required=True,
+                    help="output directory (resumed if it exists): summary.csv, ensemble.nc")
+    en.add_argument("--histories", action="store_true", help="also write each member's tension history")
+    en.add_argument("--chunk-size", type=_positive_int, default=100, help="members per compiled batch")
+    en.set_defaults(func=cmd_ensemble)
+    return en
+
+
+def cmd_ensemble(args) -> int:
+    import os
+
+    from .._progress import Progress, enabled
+    from .store import SUMMARY_STATS, run_chunked
+    from .vary import parse_vary, sweep
+
+    varies = [parse_vary(v) for v in args.vary]  # names checked before any work
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        raise ValueError(f"--out {args.out}: exists and is not a directory")
+    parent = os.path.dirname(os.path.abspath(args.out))
+    if not os.path.isdir(parent):
+        raise ValueError(f"--out {args.out}: folder {parent} does not exist")
+    _, scene, kwargs = _load_for_dynamics(args)
+    members, table = sweep(scene, varies)
+    prog = Progress("ensemble", enabled(args.quiet))
+    n_chunks = -(-len(members) // min(args.chunk_size, len(members)))
+    prog.say(f"{len(members)} members in {n_chunks} chunk(s) of up to {args.chunk_size}; "
+             "compiling…")
+
+    def on_chunk(k, n):
+        prog.bar((k + 1) / n, f"chunk {k + 1}/{n} done, {prog.elapsed():.0f} s")
+
+    t0 = time.perf_counter()
+    data = run_chunked(
+        members, args.out, args.duration, chunk_size=args.chunk_size,
+        histories=args.histories, on_chunk=on_chunk, **kwargs,
+    )
+    prog.close()
+    wall = time.perf_counter() - t0
+    ids = [ln.label for ln in scene.lines]
+    names = [n for n, _ in varies]
+    cols = ["member"] + names + ["status", "steps"]
+    for j, lid in enumerate(ids):
+        for end in ("tension_a", "tension_b"):
+            cols += [f"L{lid}_{end}_{st}" for st in SUMMARY_STATS]
+    with open(os.path.join(args.out, "summary.csv"), "w") as f:
+        f.write(",".join(cols) + "\n")
+        for i, row in enumerate(table):
+            vals = [str(i)] + [repr(row[n]) for n in names]
+            vals += [str(data["status"][i]), str(int(data["num_steps"][i]))]
+            for j in range(len(ids)):
+                for end in ("tension_a", "tension_b"):
+                    vals += [f"{data[f'stat_{end}_{st}'][i, j]:.9g}" for st in SUMMARY_STATS]
+            f.write(",".join(vals) + "\n")
+    if args.histories:
+        hdir = os.path.join(args.out, "histories")
+        os.makedirs(hdir, exist_ok=True)
+        hcols = ["t"] + [f"L{lid}_{end}" for lid in ids for end in ("tension_a", "tension_b")]
+        for i in range(len(table)):
+            cols_i = [data["ts"]]
+            for j in range(len(ids)):
+                cols_i += [data["tension_a"][i, :, j], data["tension_b"][i, :, j]]
+            np.savetxt(os.path.join(hdir, f"member_{i:05d}.csv"), np.column_stack(cols_i),
+                       delimiter=",", header=",".join(hcols), comments="", fmt="%.15g")
+    from ..io.ensemble import ensemble_dataset
+
+    ds = ensemble_dataset(data, table, names, ids, attrs=dict(
+        deck=args.deck, motion=_motion_path(args) or "none",
+        settings=dict(kwargs, duration=args.duration, segments=args.segments),
+        history=_command_line(args)))
+    from ..io.results import write_netcdf
+
+    write_netcdf(ds, os.path.join(args.out, "ensemble.nc"))
+    n_bad = int(np.sum(data["status"] != "ok"))
+    print(
+        f"{len(table)} members in {wall:.1f} s; {n_bad} failed; summary: "
+        f"{os.path.join(args.out, 'summary.csv')}, {os.path.join(args.out, 'ensemble.nc')}",
+        file=sys.stderr,
+    )
+    return 0
