@@ -64,7 +64,7 @@ class LinearElement(AbstractElement):
         return tension + lt.damping * strain_rate
 
     # -- forces ---------------------------------------------------------------
-    def nodal_forces(self, line, env, r, v):
+    def nodal_forces(self, line, env, r, v, t=0.0):
         lt = line.line_type
         tangent, stretched = self._segments(r)
         tension = self.segment_tensions(line, r, v)
@@ -76,7 +76,7 @@ class LinearElement(AbstractElement):
         force = force.at[:, 2].add(-weight * node_len)
 
         if lt.drag is not None:
-            u = v if env.current is None else v - env.current.velocity(r[:, 2])
+            u = v if env.current is None else v - env.current.velocity(r[:, 2], t)
             force = force + _to_nodes(
                 _drag(lt, env, u[:-1], tangent, stretched),
                 _drag(lt, env, u[1:], tangent, stretched),
@@ -88,11 +88,11 @@ class LinearElement(AbstractElement):
 
     def accelerations(self, line, env, t, r, v):
         tangent, stretched = self._segments(r)
-        force = self.nodal_forces(line, env, r, v)
+        force = self.nodal_forces(line, env, r, v, t)
         return self.mass.accelerations(line, env, t, force, tangent, stretched)
 
-    def end_forces(self, line, env, r, v):
-        force = self.nodal_forces(line, env, r, v)
+    def end_forces(self, line, env, r, v, t=0.0):
+        force = self.nodal_forces(line, env, r, v, t)
         return force[0], force[-1]
 
 

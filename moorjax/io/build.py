@@ -23,6 +23,10 @@ MoorDyn conventions kept (so a deck means the same in both codes):
   ``coupledpinned`` bodies are refused (:func:`build_scene` says why and what to
   do instead); a body's mass, CG, inertia, volume, CdA and Ca are not used.
 
+- Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
+  ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
+  environment's current; line drag acts on the velocity relative to it.
+
 Scene structure follows the deck: no drag / added mass terms when their
 coefficients are all zero, no seabed term when every line is buoyant.
 """
@@ -41,10 +45,12 @@ from ..model import (
     LinearEA,
     LineType,
     MorisonDrag,
+    ProfileCurrent,
     Seabed,
     SeabedFriction,
     TabulatedEA,
     TabulatedPath,
+    TimeProfileCurrent,
 )
 from ..model.scene import Scene
 from .deck import Deck, DeckBody, DeckPoint, options_with_defaults
@@ -182,5 +188,20 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         mu = float(opts.get("FrictionCoefficient") or 0.0)
         friction = SeabedFriction(mu) if mu > 0 else None
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction)
-    env = Environment(depth, rho, g, seabed=seabed)
+    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
     return Scene(lines, env)
+
+
+def deck_current(deck: Deck):
+    """The deck's current as a moorjax current field, or ``None``.
+
+    ``Currents = 1``: a :class:`ProfileCurrent` (linear in z, held beyond the
+    ends, as MoorDyn's steady current grid); ``Currents = 2``: a
+    :class:`TimeProfileCurrent` (linear in z and t, held beyond the ends).
+    """
+    cur = deck.current
+    if cur is None:
+        return None
+    if cur.mode == 1:
+        return ProfileCurrent(cur.z, cur.velocity)
+    return TimeProfileCurrent(cur.t, cur.z, cur.velocity)

@@ -20,8 +20,10 @@ and ``Coupled``/``Vessel`` points and points fixed in bodies (``Body1``, ...).
 ``BODIES`` rows of every kind (``fixed``, ``coupled``, ``free``,
 ``coupledpinned``) are read into :class:`DeckBody` records;
 :func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
-others with the reason.  Free points, rods, failures, external loads, waves,
-currents and 3-D bathymetry raise :class:`InputError` ("not supported yet").
+others with the reason.  Currents (``Currents`` 1 and 2) are read from
+MoorDyn's side files (:mod:`moorjax.io.currents`). Free points, rods,
+failures, external loads, wave kinematics, 4-D current grids and 3-D
+bathymetry raise :class:`InputError` ("not supported yet").
 Everything is validated on reading; every error names ``file:line``, the
 field, the value as written, its unit and what is expected.
 
@@ -39,6 +41,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .currents import CURRENT_FILES, DeckCurrent, read_current_profile, read_dynamic_current_profile
 from .errors import InputError, InputWarning
 from .frames import body_point_positions
 
@@ -224,6 +227,9 @@ class Deck:
             :func:`warnings.warn` as :class:`~moorjax.io.errors.InputWarning`).
         bodies: body id -> :class:`DeckBody`, in file order (empty without a
             ``BODIES`` section).
+        current: the current of a deck with ``Currents`` 1 or 2, read from
+            the file MoorDyn-C reads next to the deck
+            (:mod:`moorjax.io.currents`); ``None`` without currents.
     """
 
     path: str
@@ -234,6 +240,7 @@ class Deck:
     options: dict[str, float | str]
     warnings: tuple[str, ...]
     bodies: dict[int, DeckBody] = field(default_factory=dict)
+    current: DeckCurrent | None = None
 
     def point_position(self, point_id: int) -> tuple[float, float, float]:
         """Global position [m] of a point at the deck's initial poses (body
@@ -946,6 +953,33 @@ def _parse_line(ctx: _Context, row: _Row) -> DeckLine:
 # ----------------------------------------------------------------------------
 
 
+def _check_currents_mode(ctx: _Context, lineno: int, name: str, token: str, value: float) -> None:
+    """``Currents``: 0 none, 1 steady and 2 dynamic depth profiles are read
+    (:mod:`moorjax.io.currents`); 3 and 4 are not implemented in MoorDyn
+    either; 5 (4-D grid) is not supported yet."""
+    if value in (0, 1, 2):
+        return
+    if value in (3, 4):
+        raise ctx.error(
+            lineno,
+            f"OPTIONS: {name} = {token}: current mode {int(value)} (steady/dynamic currents at nodes) is "
+            "not implemented in MoorDyn v2 either; expected 0 (none), 1 (current_profile.txt) or "
+            "2 (current_profile_dynamic.txt)",
+        )
+    if value == 5:
+        raise ctx.error(
+            lineno,
+            f"OPTIONS: {name} = {token}: 4-D current grids (current_profile_4d.txt) are not supported "
+            "yet; expected 0 (none), 1 (steady depth profile, current_profile.txt) or 2 (depth profile "
+            "in time, current_profile_dynamic.txt)",
+        )
+    raise ctx.error(
+        lineno,
+        f"OPTIONS: {name} = {token} is not a MoorDyn current mode; expected 0, 1 or 2 "
+        "(3, 4: not implemented in MoorDyn; 5: 4-D grid, not supported yet)",
+    )
+
+
 def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | str], dict[str, int]]:
     options: dict[str, float | str] = {}
     where: dict[str, int] = {}
@@ -985,11 +1019,15 @@ def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | 
                     "expected a water depth > 0 in m",
                 )
             value = _number(ctx, row, 0, what, name, unit, constraint)
-            if canonical in ("WaveKin", "Currents") and value != 0:
+            if canonical == "WaveKin" and value != 0:
                 raise ctx.error(
                     row.lineno,
-                    f"{what}: {name} = {value_tok}: waves and currents are not supported yet; expected 0",
+                    f"{what}: {name} = {value_tok}: wave kinematics on lines are not supported yet "
+                    "(MoorDyn's WaveKin 1 external, 2 FFT grid, 3 elevation grid, 7 component sum); "
+                    "expected 0",
                 )
+            if canonical == "Currents":
+                _check_currents_mode(ctx, row.lineno, name, value_tok, value)
             key = canonical
         if key in options:
             ctx.warn(
@@ -1065,6 +1103,15 @@ def _parse(text: str, ctx: _Context) -> Deck:
     option_lines: dict[str, int] = {}
     if "OPTIONS" in sections:
         options, option_lines = _parse_options(ctx, sections["OPTIONS"])
+
+    # --- currents: the file MoorDyn-C reads from the deck's folder
+    current = None
+    mode = int(options.get("Currents", 0))
+    if mode:
+        origin = f"{ctx.path}:{option_lines['Currents']}: OPTIONS: Currents = {mode}"
+        side = Path(ctx.path).parent / CURRENT_FILES[mode]
+        reader = read_current_profile if mode == 1 else read_dynamic_current_profile
+        current = reader(side, origin)
 
     # --- unsupported object sections
     for kind, what in (
@@ -1204,6 +1251,7 @@ def _parse(text: str, ctx: _Context) -> Deck:
         options=options,
         warnings=tuple(ctx.warnings),
         bodies=bodies,
+        current=current,
     )
 
 

@@ -15,6 +15,7 @@ from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
 from .environment import Environment as Environment
 from .environment import ProfileCurrent as ProfileCurrent
+from .environment import TimeProfileCurrent as TimeProfileCurrent
 from .environment import Seabed as Seabed
 from .environment import SeabedFriction as SeabedFriction
 from .environment import UniformCurrent as UniformCurrent
@@ -43,6 +44,7 @@ __all__ = [
     'PolyesterMBL',
     'PolyesterWu',
     'ProfileCurrent',
+    'TimeProfileCurrent',
     'Scene',
     'Seabed',
     'SeabedFriction',

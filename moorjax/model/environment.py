@@ -62,11 +62,11 @@ class Seabed(eqx.Module):
 
 
 class AbstractCurrent(eqx.Module):
-    """A steady current field U(z) [m/s]."""
+    """A current field U(z, t) [m/s] (steady fields ignore t)."""
 
     @abc.abstractmethod
-    def velocity(self, z: Array) -> Array:
-        """Current velocity (..., 3) [m/s] at heights z (...) [m]."""
+    def velocity(self, z: Array, t=0.0) -> Array:
+        """Current velocity (..., 3) [m/s] at heights z (...) [m] and time t [s]."""
 
 
 class UniformCurrent(AbstractCurrent):
@@ -78,7 +78,7 @@ class UniformCurrent(AbstractCurrent):
         check_finite(velocity, "current velocity", "m/s")
         self.u = jnp.asarray(velocity, dtype=float).reshape(3)
 
-    def velocity(self, z):
+    def velocity(self, z, t=0.0):
         return jnp.broadcast_to(self.u, jnp.shape(z) + (3,))
 
 
@@ -104,9 +104,59 @@ class ProfileCurrent(AbstractCurrent):
             raise ValueError("current profile heights z [m] must be strictly increasing")
         self.z, self.u = z, u
 
-    def velocity(self, z):
+    def velocity(self, z, t=0.0):
         zf = jnp.ravel(z)
         out = jnp.stack([jnp.interp(zf, self.z, self.u[:, i]) for i in range(3)], axis=-1)
+        return out.reshape(jnp.shape(z) + (3,))
+
+
+def _bracket(grid, x):
+    """Index i and weight f with x ≈ (1 − f)·grid[i] + f·grid[i+1], clamped to the ends."""
+    if grid.shape[0] == 1:
+        return jnp.zeros(jnp.shape(x), int), jnp.zeros(jnp.shape(x))
+    i = jnp.clip(jnp.searchsorted(grid, x, side="right") - 1, 0, grid.shape[0] - 2)
+    f = jnp.clip((x - grid[i]) / (grid[i + 1] - grid[i]), 0.0, 1.0)
+    return i, f
+
+
+class TimeProfileCurrent(AbstractCurrent):
+    """A depth profile that changes in time (MoorDyn's ``Currents = 2``).
+
+    Bilinear in z and t, held at the values of the nearest end beyond the
+    tabulated heights and times (MoorDyn v2 docs, "Currents = 2 (Dynamic
+    Currents Grid)": "a point outside of the defined grid (either in z value or
+    in time) will use the nearest value").
+
+    Args:
+        t: (n_t,) increasing times [s].
+        z: (k,) increasing heights [m] (negative below the surface).
+        velocity: (n_t, k, 3) current velocities [m/s].
+    """
+
+    t: Array
+    z: Array
+    u: Array
+
+    def __init__(self, t, z, velocity):
+        t = jnp.asarray(t, dtype=float)
+        z = jnp.asarray(z, dtype=float)
+        u = jnp.asarray(velocity, dtype=float)
+        if t.ndim != 1 or z.ndim != 1 or u.shape != (t.shape[0], z.shape[0], 3):
+            raise ValueError(f"a time-varying current profile needs t (n,), z (k,) and velocity "
+                             f"(n, k, 3); got {t.shape}, {z.shape}, {u.shape}")
+        for arr, name, unit in ((t, "t", "s"), (z, "z", "m"), (u, "velocity", "m/s")):
+            check_finite(arr, f"current profile {name}", unit)
+        for arr, name, unit in ((t, "times t", "s"), (z, "heights z", "m")):
+            if arr.shape[0] > 1 and not bool(jnp.all(jnp.diff(arr) > 0)):
+                raise ValueError(f"current profile {name} [{unit}] must be strictly increasing")
+        self.t, self.z, self.u = t, z, u
+
+    def velocity(self, z, t=0.0):
+        it, ft = _bracket(self.t, jnp.asarray(t, dtype=float))
+        j = jnp.minimum(it + 1, self.t.shape[0] - 1)
+        profile = (1.0 - ft) * self.u[it] + ft * self.u[j]  # (k, 3) at time t
+        zf = jnp.ravel(z)
+        out = jnp.stack([jnp.interp(zf, self.z, profile[:, i]) for i in range(3)], axis=-1)
         return out.reshape(jnp.shape(z) + (3,))
 
 
