@@ -314,8 +314,8 @@ _OPTION_RULES: dict[str, tuple[str, str]] = {
     "writeLog": ("[-]", "any"),
     "dtM": ("s", "pos"),
     "CFL": ("[-]", "pos"),
-    "g": ("m/s^2", "pos"),
-    "rho": ("kg/m^3", "pos"),
+    "g": ("m/s^2", "nonneg"),  # MoorDyn runs g = 0 (weightless tests) and rho = 0 (in air)
+    "rho": ("kg/m^3", "nonneg"),
     "WtrDpth": ("m", "pos"),
     "kBot": ("Pa/m", "nonneg"),
     "cBot": ("Pa-s/m", "nonneg"),

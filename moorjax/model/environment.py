@@ -161,7 +161,8 @@ class TimeProfileCurrent(AbstractCurrent):
 
 
 class Environment(eqx.Module):
-    """Water depth [m], density ρ [kg/m³], gravity g [m/s²], optional seabed/current."""
+    """Water depth [m], density ρ [kg/m³] (≥ 0; 0 is air), gravity g [m/s²]
+    (≥ 0), optional seabed/current."""
 
     depth: Array
     rho: Array
@@ -172,8 +173,10 @@ class Environment(eqx.Module):
     def __init__(self, depth, rho=1025.0, g=9.80665, seabed: Seabed | None = None,
                  current: AbstractCurrent | None = None):
         check_positive(depth, "water depth", "m")
-        check_positive(rho, "water density", "kg/m³")
-        check_positive(g, "gravity", "m/s²")
+        # zero is allowed, as in MoorDyn: rho = 0 is a line in air (no buoyancy,
+        # drag or added mass), g = 0 a weightless system
+        check_nonnegative(rho, "water density", "kg/m³")
+        check_nonnegative(g, "gravity", "m/s²")
         self.depth = jnp.asarray(depth, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
         self.g = jnp.asarray(g, dtype=float)
