@@ -11,6 +11,10 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Seabed: ``kBot`` [Pa/m] and ``cBot`` [Pa·s/m] on d·l; ``FrictionCoefficient``
   > 0 adds smoothed Coulomb friction (slip velocity 0.01 m/s).
 - Coupled points hold their deck position unless a motion is given.
+- Free points (``Free``/``Point``/``Connect``) become
+  :class:`~moorjax.body.ConnectionPoint` s in ``Scene.bodies`` (file order),
+  their lines ending on them through ``BodyEnd(k, (0, 0, 0))``; the deck's
+  position is where the statics start (MoorDyn: the initial guess).
 - Bodies (``BODIES``): a point ``Body<n>`` is fixed in body n, its coordinates
   in body axes relative to the body's reference point (X0, Y0, Z0), placed at
   (X0, Y0, Z0) + R·p with MoorDyn's R = Rx(r0)·Ry(p0)·Rz(y0) (degrees in the
@@ -37,8 +41,10 @@ import warnings
 
 import numpy as np
 
+from ..body.point import ConnectionPoint
 from ..model import (
     AddedMass,
+    BodyEnd,
     Environment,
     FixedEnd,
     Line,
@@ -166,9 +172,12 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
                 stacklevel=2,
             )
 
+    free_ids = [p.id for p in deck.points.values() if p.attachment == "free"]
     ends = {}
     for p in deck.points.values():
-        if p.body is not None:
+        if p.attachment == "free":
+            ends[p.id] = BodyEnd(free_ids.index(p.id), (0.0, 0.0, 0.0), p.position)
+        elif p.body is not None:
             ends[p.id] = _body_point_end(deck, p, motion)
         elif p.attachment == "coupled" and motion is not None and p.id in motion.positions:
             ends[p.id] = TabulatedPath(motion.t, motion.positions[p.id], motion.velocities[p.id])
@@ -189,7 +198,35 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         friction = SeabedFriction(mu) if mu > 0 else None
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction)
     env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
-    return Scene(lines, env)
+    points = [_free_point(deck, deck.points[i], lines, rho, g) for i in free_ids]
+    return Scene(lines, env, bodies=points)
+
+
+def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float) -> ConnectionPoint:
+    """A deck's free point as a :class:`ConnectionPoint` (MoorDyn's Point).
+
+    MoorDyn's point: weight M·g, buoyancy ρ·V·g, drag ½ρ·CdA·|u|u on the velocity
+    u relative to the water and added mass Ca·ρ·V; its inertia also holds the
+    end nodes of its lines (half an element's mass plus its added mass
+    ρA·(l/2)·Ca). The lines' end forces carry the end nodes' weight and drag,
+    so those end-node inertias go into ``added_mass`` (inertia only, no
+    weight): ΣμL/2 + ρA(l/2)·Ca_n, the normal Ca taken for every direction.
+    """
+    added = p.ca * rho * p.volume
+    for line, dl in zip(lines, deck.lines):
+        for end in ("a", "b"):
+            if getattr(dl, f"point_{end}") == p.id:
+                lt = line.line_type
+                half = 0.5 * float(line.segment_length)
+                added += float(lt.mass_per_length) * half
+                if lt.added_mass is not None:
+                    added += rho * float(lt.area) * half * float(lt.added_mass.ca_normal)
+    if not p.mass + added > 0:
+        raise InputError(
+            f"{deck.path}:{p.source_line}: POINTS id {p.id}: a free point with Mass = 0 kg, no "
+            "added mass and no line attached has no inertia; give it a Mass [kg] or attach a line")
+    return ConnectionPoint(p.mass, p.position, volume=p.volume, added_mass=added, cda=p.cda,
+                           rho=rho, g=g, label=f"P{p.id}")
 
 
 def deck_current(deck: Deck):

@@ -15,13 +15,14 @@ The deck format (MoorDyn v2, also the v1 section names) is a plain-text file:
 Values are whitespace-separated; ``!``, ``#`` and ``%`` start a comment.
 Blank lines inside sections are skipped.
 
-Only what moorjax can simulate is accepted: lines between ``Fixed``/``Anchor``
-and ``Coupled``/``Vessel`` points and points fixed in bodies (``Body1``, ...).
+Only what moorjax can simulate is accepted: lines between ``Fixed``/``Anchor``,
+``Coupled``/``Vessel`` and ``Free``/``Connect`` points and points fixed in
+bodies (``Body1``, ...).
 ``BODIES`` rows of every kind (``fixed``, ``coupled``, ``free``,
 ``coupledpinned``) are read into :class:`DeckBody` records;
 :func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
 others with the reason.  Currents (``Currents`` 1 and 2) are read from
-MoorDyn's side files (:mod:`moorjax.io.currents`). Free points, rods,
+MoorDyn's side files (:mod:`moorjax.io.currents`). Rods,
 failures, external loads, wave kinematics, 4-D current grids and 3-D
 bathymetry raise :class:`InputError` ("not supported yet").
 Everything is validated on reading; every error names ``file:line``, the
@@ -102,12 +103,14 @@ class DeckLineType:
 
 @dataclass(frozen=True)
 class DeckPoint:
-    """One row of ``POINTS``: a line end held fixed, driven by the caller, or fixed in a body.
+    """One row of ``POINTS``: a line end held fixed, driven by the caller, free, or fixed in a body.
 
     Attributes:
         id: point number (1, 2, 3, ... in file order).
         attachment: ``'fixed'`` (Fixed/Anchor/Fix), ``'coupled'``
-            (Coupled/Vessel/Ves/Cpld/Fairlead) or ``'body'`` (Body<n>).
+            (Coupled/Vessel/Ves/Cpld/Fairlead), ``'free'`` (Free/Point/
+            Connect/Con: a point mass moved by its lines and loads; its
+            position is the initial guess) or ``'body'`` (Body<n>).
         position: (x, y, z) [m], global frame; for coupled points the initial
             position; for body points the position in the body's axes relative
             to its reference point (X0, Y0, Z0) (see :meth:`Deck.point_position`
@@ -737,11 +740,7 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
     elif word in _COUPLED_WORDS and not rest:
         attachment = "coupled"
     elif word in _FREE_WORDS and not rest:
-        raise ctx.error(
-            row.lineno,
-            f"{what}: Attachment = {word_tok!r}: free points are not supported yet; "
-            "expected Fixed/Anchor or Coupled/Vessel",
-        )
+        attachment = "free"
     elif word == "BODY":
         if not re.fullmatch(r"\d+", rest) or int(rest) == 0:
             raise ctx.error(
@@ -760,7 +759,7 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
         raise ctx.error(
             row.lineno,
             f"{what}: Attachment = {word_tok!r} is not a known point type; expected one of "
-            "Fixed, Anchor, Coupled, Vessel, Body<n> (Free/Connect are not supported yet)",
+            "Fixed, Anchor, Coupled, Vessel, Free (Point, Connect), Body<n>",
         )
 
     x = _number(ctx, row, 2, what, "X", "m")
