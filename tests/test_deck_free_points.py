@@ -123,3 +123,23 @@ def test_free_point_in_dynamic_current_matches_moordyn():
     assert moved > 0.1  # the current drags the bottom point along x and y
     err = np.max(np.linalg.norm(p - p_ref, axis=1))
     assert err < 0.01 * moved, (err, moved)
+
+
+def test_free_point_drag_acts_on_velocity_relative_to_the_current():
+    from moorjax.model import UniformCurrent
+
+    text = DECK.format(word="Free", mass=500.0)
+    deck = parse_deck(text)
+    point = build_scene(deck).bodies[0]
+    assert point.current is None  # no current in the deck: no current term
+    with_current = ConnectionPoint(500.0, (30.0, 0.0, -30.0), volume=2.0, cda=1.5,
+                                   current=UniformCurrent([0.8, -0.3, 0.0]))
+    z = with_current.rest_state()
+    acc = np.asarray(with_current.rate(0.0, z, jnp.zeros(6)))[6:9]
+    u = np.array([0.8, -0.3, 0.0])
+    drag = 0.5 * 1025.0 * 1.5 * np.linalg.norm(u) * u
+    np.testing.assert_allclose(acc[:2], drag[:2] / 500.0, rtol=1e-12)
+    # moving with the water: no drag
+    z = z.at[6:9].set(jnp.asarray(u))
+    acc = np.asarray(with_current.rate(0.0, z, jnp.zeros(6)))[6:9]
+    np.testing.assert_allclose(acc[:2], 0.0, atol=1e-12)

@@ -198,11 +198,11 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         friction = SeabedFriction(mu) if mu > 0 else None
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction)
     env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
-    points = [_free_point(deck, deck.points[i], lines, rho, g) for i in free_ids]
+    points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
     return Scene(lines, env, bodies=points)
 
 
-def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float) -> ConnectionPoint:
+def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) -> ConnectionPoint:
     """A deck's free point as a :class:`ConnectionPoint` (MoorDyn's Point).
 
     MoorDyn's point: weight M·g, buoyancy ρ·V·g, drag ½ρ·CdA·|u|u on the velocity
@@ -226,7 +226,8 @@ def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float) -> Connec
             f"{deck.path}:{p.source_line}: POINTS id {p.id}: a free point with Mass = 0 kg, no "
             "added mass and no line attached has no inertia; give it a Mass [kg] or attach a line")
     return ConnectionPoint(p.mass, p.position, volume=p.volume, added_mass=added, cda=p.cda,
-                           rho=rho, g=g, label=f"P{p.id}")
+                           rho=rho, g=g, label=f"P{p.id}",
+                           current=current if p.cda > 0 else None)
 
 
 def deck_current(deck: Deck):
