@@ -656,11 +656,30 @@ def _parse_line_type(ctx: _Context, row: _Row) -> DeckLineType:
     ea_tok = t[3]
     ea: float | None = None
     ea_table = None
-    if "|" in ea_tok or ea_tok.upper().startswith("SYROPE:"):
+    if ea_tok.upper().startswith("SYROPE:"):
         raise ctx.error(
             row.lineno,
-            f"{what}: EA = {ea_tok!r}: viscoelastic / Syrope stiffness is not supported yet; "
-            "expected one EA in N or a stiffness-table file",
+            f"{what}: EA = {ea_tok!r}: the Syrope polyester model is not supported yet. moorjax lacks "
+            "(1) the load-path-dependent working curves (the original working curve OWC table and "
+            "the LINEAR/QUADRATIC/EXP curve with k1, k2 from the Syrope file), (2) the history "
+            "state per segment (highest and current mean tension, initialised from the SYROPE IC "
+            "section's Tmax0, Tmean0) and (3) the viscoelastic dynamic branch EA_d = EA_Dc + "
+            "EA_D_Lm*mean_load in series with the static one (an extra internal strain per "
+            "segment in the state). Expected one EA in N or a stiffness-table file",
+        )
+    if "|" in ea_tok:
+        n_parts = len(ea_tok.split("|"))
+        form = ("EA_s|EA_d: constant dynamic stiffness" if n_parts == 2
+                else "EA_s|EA_Dc|EA_D_Lm: load-dependent dynamic stiffness" if n_parts == 3
+                else f"{n_parts} '|'-separated values")
+        raise ctx.error(
+            row.lineno,
+            f"{what}: EA = {ea_tok!r} ({form}): MoorDyn's viscoelastic line model is not supported "
+            "yet. moorjax lacks the second (dynamic) spring-dashpot branch of each segment: an "
+            "internal strain per segment in the dynamic state with its own rate equation, the "
+            "dynamic stiffness EA_d (and, for three values, its dependence on the running mean "
+            "tension, EA_d = EA_Dc + EA_D_Lm*mean_load) and the dynamic damping BA_d from "
+            "'BA_s|BA_d'. Expected one EA in N or a stiffness-table file",
         )
     if _is_number(ea_tok) or _NONFINITE_RE.match(ea_tok):
         ea = _number(ctx, row, 3, what, "EA", "N", "pos")
@@ -671,8 +690,10 @@ def _parse_line_type(ctx: _Context, row: _Row) -> DeckLineType:
     if "|" in ba_tok:
         raise ctx.error(
             row.lineno,
-            f"{what}: BA/-zeta = {ba_tok!r}: static|dynamic damping is not supported yet; "
-            "expected one number (N-s, or -zeta if negative)",
+            f"{what}: BA/-zeta = {ba_tok!r}: static|dynamic damping (BA_s|BA_d) belongs to "
+            "MoorDyn's viscoelastic line model, which is not supported yet (moorjax lacks the "
+            "dynamic spring-dashpot branch per segment); expected one number (N-s, or -zeta if "
+            "negative)",
         )
     if not (_is_number(ba_tok) or _NONFINITE_RE.match(ba_tok)) and _resolve_side_file(ctx, ba_tok).is_file():
         raise ctx.error(
