@@ -101,7 +101,11 @@ def _check_body_supported(deck: Deck, body: DeckBody) -> None:
     where = f"{deck.path}:{body.source_line}: BODIES id {body.id}"
     if body.attachment == "free":
         raise InputError(
-            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck. "
+            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck yet: "
+            "moorjax lacks MoorDyn's submerged 6-DOF body (weight at the CG and buoyancy rho*V*g "
+            "at the reference point with their moments at any rotation, per-DOF drag "
+            "0.5*rho*CdA*|v|v in body axes on the velocity relative to the water, added mass "
+            "rho*V*Ca, and the inertia of the points and line ends fixed in it). "
             "moorjax's moving body, moorjax.body.RigidBody, is a floating (Cummins-form) body: it "
             "needs a hydrostatic restoring matrix with positive heave stiffness C[2,2] [N/m] and "
             "added mass [kg], which a deck does not carry (it gives Mass, CG, I, Volume, CdA, Ca "
