@@ -354,7 +354,7 @@ ERROR_CASES = {
     "option zero depth": ({38: "0  WtrDpth"}, 38, ["WtrDpth = 0 m", "> 0"]),
     "option zero dtM": ({34: "0  dtM"}, 34, ["dtM = 0 s", "> 0"]),
     "option waves": ({33: ["0 writeLog", "1 WaveKin"]}, 34, ["WaveKin = 1", "not supported"]),
-    "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "not supported"]),
+    "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "no such file next to the deck"]),
     # structure
     "bodies row, unknown kind": (
         {POINTS_HDR: ["------ BODIES ------", "ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca",

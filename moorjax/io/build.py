@@ -31,8 +31,12 @@ MoorDyn conventions kept (so a deck means the same in both codes):
   ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
   environment's current; line drag acts on the velocity relative to it.
 
+- ``SeafloorFile``: the bathymetry grid becomes the seabed's
+  :class:`Bathymetry` (contact along the local seabed normal); the
+  environment's depth is the deepest of WtrDpth and the grid.
+
 Scene structure follows the deck: no drag / added mass terms when their
-coefficients are all zero, no seabed term when every line is buoyant.
+coefficients are all zero, no seabed term when every line is buoyant (wet weight < 0).
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ import numpy as np
 from ..body.point import ConnectionPoint
 from ..model import (
     AddedMass,
+    Bathymetry,
     BodyEnd,
     Environment,
     FixedEnd,
@@ -162,6 +167,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         raise InputError(f"--segments = {segments} must be an integer >= 1")
     opts = options_with_defaults(deck)
     depth, rho, g = float(opts["WtrDpth"]), float(opts["rho"]), float(opts["g"])
+    if deck.seafloor is not None:  # the environment's depth is the deepest water
+        depth = max(depth, -float(deck.seafloor.z.min()))
     if depth <= 0:
         raise InputError(f"{deck.path}: WtrDpth = {depth} m must be > 0")
 
@@ -197,10 +204,15 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         lines.append(Line(lt, dl.length, n, ends[dl.point_a], ends[dl.point_b], label=str(dl.id)))
 
     seabed = None
-    if any(w > 0 for w in weights):
+    # neutral lines (to rounding) can be pushed onto the seabed too
+    if any(w >= -1e-6 * float(ln.line_type.mass_per_length) * g for w, ln in zip(weights, lines)):
         mu = float(opts.get("FrictionCoefficient") or 0.0)
         friction = SeabedFriction(mu) if mu > 0 else None
-        seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction)
+        bathymetry = None
+        if deck.seafloor is not None:
+            sf = deck.seafloor
+            bathymetry = Bathymetry(sf.x, sf.y, sf.z)
+        seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
     env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
     points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
     return Scene(lines, env, bodies=points)

@@ -23,8 +23,9 @@ bodies (``Body1``, ...).
 :func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
 others with the reason.  Currents (``Currents`` 1 and 2) are read from
 MoorDyn's side files (:mod:`moorjax.io.currents`). Rods,
-failures, external loads, wave kinematics, 4-D current grids and 3-D
-bathymetry raise :class:`InputError` ("not supported yet").
+failures, external loads, wave kinematics and 4-D current grids raise
+:class:`InputError` ("not supported yet"). ``SeafloorFile`` bathymetry
+grids are read (:mod:`moorjax.io.seafloor`).
 Everything is validated on reading; every error names ``file:line``, the
 field, the value as written, its unit and what is expected.
 
@@ -45,6 +46,7 @@ from pathlib import Path
 from .currents import CURRENT_FILES, DeckCurrent, read_current_profile, read_dynamic_current_profile
 from .errors import InputError, InputWarning
 from .frames import body_point_positions
+from .seafloor import DeckSeafloor, find_seafloor_file, read_seafloor
 
 __all__ = [
     "DeckLineType",
@@ -233,6 +235,8 @@ class Deck:
         current: the current of a deck with ``Currents`` 1 or 2, read from
             the file MoorDyn-C reads next to the deck
             (:mod:`moorjax.io.currents`); ``None`` without currents.
+        seafloor: the bathymetry grid of a deck with ``SeafloorFile``
+            (:mod:`moorjax.io.seafloor`); ``None`` for a flat seabed.
     """
 
     path: str
@@ -244,6 +248,7 @@ class Deck:
     warnings: tuple[str, ...]
     bodies: dict[int, DeckBody] = field(default_factory=dict)
     current: DeckCurrent | None = None
+    seafloor: DeckSeafloor | None = None
 
     def point_position(self, point_id: int) -> tuple[float, float, float]:
         """Global position [m] of a point at the deck's initial poses (body
@@ -1027,9 +1032,16 @@ def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | 
             value = value_tok.lower()
             key = canonical
         elif canonical == "SeafloorFile":
-            raise ctx.error(
-                row.lineno, f"{what}: SeafloorFile = {value_tok!r}: 3-D bathymetry is not supported yet"
-            )
+            found = find_seafloor_file(value_tok, ctx.path)
+            if found is None:
+                raise ctx.error(
+                    row.lineno,
+                    f"{what}: SeafloorFile = {value_tok!r}: no such file next to the deck or in its "
+                    "parent folders (MoorDyn resolves it from its working directory); give a path "
+                    "relative to the deck",
+                )
+            value = str(found)
+            key = canonical
         else:
             unit, constraint = _OPTION_RULES[canonical]
             if canonical == "WtrDpth" and not (_is_number(value_tok) or _NONFINITE_RE.match(value_tok)):
@@ -1132,6 +1144,10 @@ def _parse(text: str, ctx: _Context) -> Deck:
         side = Path(ctx.path).parent / CURRENT_FILES[mode]
         reader = read_current_profile if mode == 1 else read_dynamic_current_profile
         current = reader(side, origin)
+
+    seafloor = None
+    if "SeafloorFile" in options:
+        seafloor = read_seafloor(options["SeafloorFile"])
 
     # --- unsupported object sections
     for kind, what in (
@@ -1272,6 +1288,7 @@ def _parse(text: str, ctx: _Context) -> Deck:
         warnings=tuple(ctx.warnings),
         bodies=bodies,
         current=current,
+        seafloor=seafloor,
     )
 
 

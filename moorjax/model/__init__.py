@@ -13,6 +13,7 @@ from .ends import KinematicEnd as KinematicEnd
 from .ends import SinePath as SinePath
 from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
+from .environment import Bathymetry as Bathymetry
 from .environment import Environment as Environment
 from .environment import ProfileCurrent as ProfileCurrent
 from .environment import TimeProfileCurrent as TimeProfileCurrent
@@ -33,6 +34,7 @@ __all__ = [
     'AddedMass',
     'Bilateral',
     'Environment',
+    'Bathymetry',
     'BodyEnd',
     'FixedEnd',
     'KinematicEnd',

@@ -37,28 +37,79 @@ class SeabedFriction(eqx.Module):
         self.v_slip = jnp.asarray(v_slip, dtype=float)
 
 
+class Bathymetry(eqx.Module):
+    """A seabed height grid z_b(x, y) [m] (MoorDyn's ``SeafloorFile``), bilinear
+    inside the grid and held at the nearest edge outside it (as MoorDyn).
+
+    Args:
+        x: (nx,) increasing grid x [m]; y: (ny,) increasing grid y [m].
+        z: (nx, ny) seabed heights [m] (negative below the surface).
+    """
+
+    x: Array
+    y: Array
+    z: Array
+
+    def __init__(self, x, y, z):
+        x, y, z = (jnp.asarray(a, dtype=float) for a in (x, y, z))
+        if x.ndim != 1 or y.ndim != 1 or z.shape != (x.shape[0], y.shape[0]):
+            raise ValueError(f"bathymetry needs x (nx,), y (ny,), z (nx, ny); got {x.shape}, {y.shape}, "
+                             f"{z.shape}")
+        for arr, name in ((x, "x"), (y, "y")):
+            check_finite(arr, f"bathymetry {name}", "m")
+            if arr.shape[0] > 1 and not bool(jnp.all(jnp.diff(arr) > 0)):
+                raise ValueError(f"bathymetry grid {name} [m] must be strictly increasing")
+        check_finite(z, "bathymetry heights", "m")
+        self.x, self.y, self.z = x, y, z
+
+    def height(self, x, y):
+        """Seabed height z_b [m] at (x, y) (any equal shapes), bilinear, clamped."""
+        i, fx = _bracket(self.x, x)
+        j, fy = _bracket(self.y, y)
+        i1 = jnp.minimum(i + 1, self.x.shape[0] - 1)
+        j1 = jnp.minimum(j + 1, self.y.shape[0] - 1)
+        z = self.z
+        return ((1 - fx) * (1 - fy) * z[i, j] + fx * (1 - fy) * z[i1, j]
+                + (1 - fx) * fy * z[i, j1] + fx * fy * z[i1, j1])
+
+    def lowest(self) -> float:
+        """The deepest seabed height [m] (concrete grids only)."""
+        return float(jnp.min(self.z))
+
+
 class Seabed(eqx.Module):
     """Vertical spring–damper contact (MoorDyn's kBot/cBot), optional friction.
 
     Contact pressure per unit line length and diameter: kBot·δ − cBot·ż for a
     penetration δ > 0, so the force on a node is (kBot·δ − cBot·ż)·d·l_node.
 
+    With a :class:`Bathymetry` the seabed is z_b(x, y) instead of the flat
+    z = −depth, and the contact acts along the local normal n of the seabed
+    surface: penetration δ = (z_b − z)·n_z (the distance below its tangent
+    plane), force (kBot·δ − cBot·v·n)·d·l_node·n, friction on the velocity
+    along the surface. (MoorDyn v2 takes the local depth but keeps the contact
+    vertical; the two agree to O(slope²).)
+
     Args:
         stiffness: kBot [Pa/m].
         damping: cBot [Pa·s/m].
         friction: optional :class:`SeabedFriction`.
+        bathymetry: optional :class:`Bathymetry` (default: flat at −depth).
     """
 
     stiffness: Array
     damping: Array
     friction: SeabedFriction | None
+    bathymetry: Bathymetry | None = None
 
-    def __init__(self, stiffness=3e6, damping=3e5, friction: SeabedFriction | None = None):
+    def __init__(self, stiffness=3e6, damping=3e5, friction: SeabedFriction | None = None,
+                 bathymetry: Bathymetry | None = None):
         check_positive(stiffness, "seabed stiffness kBot", "Pa/m")
         check_nonnegative(damping, "seabed damping cBot", "Pa·s/m")
         self.stiffness = jnp.asarray(stiffness, dtype=float)
         self.damping = jnp.asarray(damping, dtype=float)
         self.friction = friction
+        self.bathymetry = bathymetry
 
 
 class AbstractCurrent(eqx.Module):
