@@ -98,3 +98,22 @@ def test_tilted_plane_contact_is_normal_to_the_seabed():
     f = np.asarray(LinearElement().nodal_forces(line, env, r, v))[1:-1]
     tangential = f - np.outer(f @ n, n)
     np.testing.assert_allclose(tangential, np.outer(np.full(5, -0.5 * expected), along), rtol=1e-6, atol=1e-6)
+
+
+def test_line_resting_on_a_sloped_seabed_matches_moorpy_inclined_catenary():
+    """Statics on a seabed rising 0.1 m per m along the line: MoorPy's catenary
+    with a seabed incline alpha = atan(0.1) (stiff bed, kBot = 3e8 Pa/m)."""
+    from moorpy.Catenary import catenary
+
+    slope, w, d = 0.1, 500.0, 0.1
+    grid = Bathymetry([-100.0, 300.0], [-10.0, 10.0], [[-60.0, -60.0], [-20.0, -20.0]])
+    lt = mj.LineType(d, w / 9.80665 + 1025.0 * np.pi * d**2 / 4, 1e9)
+    line = mj.Line(lt, 100.0, 40, mj.FixedEnd((0.0, 0.0, -50.0)), mj.FixedEnd((80.0, 0.0, -5.0)))
+    env = mj.Environment(70.0, seabed=Seabed(3e8, 0.0, None, grid))
+    from moorjax.statics import solve_line_statics
+
+    st = solve_line_statics(line, env)
+    fah, fav, fbh, fbv, info = catenary(80.0, 45.0, 100.0, 1e9, w, CB=0, alpha=np.degrees(np.arctan(slope)))
+    assert info["LBot"] > 30  # a third of the line lies on the slope
+    np.testing.assert_allclose(float(st.tension_b), np.hypot(fbh, fbv), rtol=1e-3)
+    np.testing.assert_allclose(float(st.tension_a), np.hypot(fah, fav), rtol=1e-3)
