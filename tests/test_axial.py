@@ -230,8 +230,6 @@ BAD = [-1.0, 0.0, math.nan, math.inf, -math.inf]
         (lambda v: mj.PolyesterMBL(v, MA, MB), "MBL", "N"),
         (lambda v: mj.PolyesterMBL(MBL, v, MB), "alpha", "-"),
         (lambda v: mj.Environment(depth=v), "water depth", "m"),
-        (lambda v: mj.Environment(320.0, rho=v), "water density", "kg/m³"),
-        (lambda v: mj.Environment(320.0, g=v), "gravity", "m/s²"),
         (lambda v: mj.Seabed(stiffness=v), "seabed stiffness kBot", "Pa/m"),
         (lambda v: mj.SinePath([0, 0, -5], [1, 0, 0], v), "path period", "s"),
         (
@@ -256,6 +254,9 @@ def test_constructors_reject_nonpositive_or_nonfinite(make, name, unit, bad):
         (lambda v: mj.PolyesterWu(RHOL, ALPHA, v, BS), "beta", "-"),
         (lambda v: mj.PolyesterMBL(MBL, MA, v), "beta", "-"),
         (lambda v: mj.LineType(0.09, 77.7, 3.8e8, damping=v), "internal damping BA", "N·s"),
+        # 0 is allowed, as in MoorDyn: rho = 0 is air, g = 0 weightless
+        (lambda v: mj.Environment(320.0, rho=v), "water density", "kg/m³"),
+        (lambda v: mj.Environment(320.0, g=v), "gravity", "m/s²"),
         (lambda v: mj.MorisonDrag(v), "Cd normal", "-"),
         (lambda v: mj.AddedMass(1.0, v), "Ca axial", "-"),
         (lambda v: mj.Seabed(damping=v), "seabed damping cBot", "Pa·s/m"),

@@ -326,8 +326,6 @@ ERROR_CASES = {
     "duplicate point": ({P2: "1  Coupled -5.2 0.0 -70.0  0 0 0 0"}, P2, ["duplicate", "id 1", f"line {P1}"]),
     "point out of sequence": ({P2: "3  Coupled -5.2 0.0 -70.0  0 0 0 0"}, P2, ["id 3", "expected 2"]),
     "point below seabed": ({P1: "1  Fixed  -853.87 0.0 -400.0  0 0 0 0"}, P1, ["-400.0", "seabed", "320.0"]),
-    "free point": ({P2: "2  Free -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Free'", "not supported"]),
-    "connect point": ({P2: "2  Connect -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Connect'", "not supported"]),
     "body point, no bodies": ({P2: "2  Body1 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body1'", "no body with id 1", "no BODIES"]),
     "body point without number": ({P2: "2  Body -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body'", "Body<n>"]),
     "body point zero": ({P2: "2  Body0 -5.2 0.0 -70.0  0 0 0 0"}, P2, ["'Body0'", "Body<n>"]),
@@ -356,7 +354,7 @@ ERROR_CASES = {
     "option zero depth": ({38: "0  WtrDpth"}, 38, ["WtrDpth = 0 m", "> 0"]),
     "option zero dtM": ({34: "0  dtM"}, 34, ["dtM = 0 s", "> 0"]),
     "option waves": ({33: ["0 writeLog", "1 WaveKin"]}, 34, ["WaveKin = 1", "not supported"]),
-    "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "not supported"]),
+    "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "no such file next to the deck"]),
     # structure
     "bodies row, unknown kind": (
         {POINTS_HDR: ["------ BODIES ------", "ID Attachment X0 Y0 Z0 r0 p0 y0 Mass CG I Volume CdA Ca",

@@ -30,6 +30,9 @@ class ConnectionPoint(eqx.Module):
         added_mass: translational added mass [kg] (e.g. Ca·ρV).
         cda: drag area Cd·A [m²]: drag ½ρ·CdA·|v|v.
         rho, g: water density [kg/m³] and gravity [m/s²].
+        current: optional :class:`~moorjax.model.environment.AbstractCurrent`:
+            the drag then acts on the velocity relative to the water at the
+            point's height (MoorDyn's points do the same).
     """
 
     mass: Array
@@ -38,6 +41,7 @@ class ConnectionPoint(eqx.Module):
     static_force: Array
     cda: Array
     rho: Array
+    current: object = None
     label: str = eqx.field(static=True, default="point")
 
     radiation = None
@@ -46,7 +50,7 @@ class ConnectionPoint(eqx.Module):
     half_size = None
 
     def __init__(self, mass, origin, *, volume=0.0, added_mass=0.0, cda=0.0, rho=1025.0,
-                 g=9.80665, label="point"):
+                 g=9.80665, label="point", current=None):
         check_nonnegative(mass, "connection point mass", "kg")
         check_nonnegative(added_mass, "connection point added mass", "kg")
         check_nonnegative(volume, "connection point volume", "m³")
@@ -61,6 +65,7 @@ class ConnectionPoint(eqx.Module):
         self.static_force = jnp.array([0.0, 0.0, net, 0.0, 0.0, 0.0])
         self.cda = jnp.asarray(cda, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
+        self.current = current
         self.label = str(label)
 
     @property
@@ -94,7 +99,10 @@ class ConnectionPoint(eqx.Module):
         pose, vel, _ = self.split(z)
         f = self.static_force[:3] + mooring[:3]
         if self.cda is not None:
-            f = f - 0.5 * self.rho * self.cda * abs_times(vel[:3])
+            u = vel[:3]
+            if self.current is not None:
+                u = u - self.current.velocity(self.origin[2] + pose[2], t)
+            f = f - 0.5 * self.rho * self.cda * abs_times(u)
         acc = f / (self.mass + self.added)
         zero = jnp.zeros(3)
         return jnp.concatenate([vel[:3], zero, acc, zero])

@@ -86,7 +86,7 @@ def vector_field(t, y, scene):
 
 def _end_forces(line, q, env, t):
     r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-    return line.element.end_forces(line, env, r, v)
+    return line.element.end_forces(line, env, r, v, t)
 
 
 def _line_rates(t, y, lines, env):
@@ -117,7 +117,7 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
     y_lines, lines, poses, vels = _body_kinematics(y, scene)
     for line, q in zip(lines, y_lines):
         r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-        a, b = line.element.end_forces(line, scene.env, r, v)
+        a, b = line.element.end_forces(line, scene.env, r, v, t)
         fa.append(a)
         fb.append(b)
         if with_nodes:

@@ -24,8 +24,9 @@ class AbstractElement(eqx.Module):
         return True
 
     @abc.abstractmethod
-    def nodal_forces(self, line, env, r, v):
-        """All non-inertial forces on every node (n+1, 3) [N], ends included."""
+    def nodal_forces(self, line, env, r, v, t=0.0):
+        """All non-inertial forces on every node (n+1, 3) [N], ends included, at
+        time t [s] (which matters only to time-varying water kinematics)."""
 
     @abc.abstractmethod
     def accelerations(self, line, env, t, r, v):
@@ -36,5 +37,5 @@ class AbstractElement(eqx.Module):
         """Axial tension of each segment (n,) [N], damping included."""
 
     @abc.abstractmethod
-    def end_forces(self, line, env, r, v):
+    def end_forces(self, line, env, r, v, t=0.0):
         """Forces (3,), (3,) [N] that the line exerts on its end A and end B points."""

@@ -64,7 +64,7 @@ class LinearElement(AbstractElement):
         return tension + lt.damping * strain_rate
 
     # -- forces ---------------------------------------------------------------
-    def nodal_forces(self, line, env, r, v):
+    def nodal_forces(self, line, env, r, v, t=0.0):
         lt = line.line_type
         tangent, stretched = self._segments(r)
         tension = self.segment_tensions(line, r, v)
@@ -76,7 +76,7 @@ class LinearElement(AbstractElement):
         force = force.at[:, 2].add(-weight * node_len)
 
         if lt.drag is not None:
-            u = v if env.current is None else v - env.current.velocity(r[:, 2])
+            u = v if env.current is None else v - env.current.velocity(r[:, 2], t)
             force = force + _to_nodes(
                 _drag(lt, env, u[:-1], tangent, stretched),
                 _drag(lt, env, u[1:], tangent, stretched),
@@ -88,11 +88,11 @@ class LinearElement(AbstractElement):
 
     def accelerations(self, line, env, t, r, v):
         tangent, stretched = self._segments(r)
-        force = self.nodal_forces(line, env, r, v)
+        force = self.nodal_forces(line, env, r, v, t)
         return self.mass.accelerations(line, env, t, force, tangent, stretched)
 
-    def end_forces(self, line, env, r, v):
-        force = self.nodal_forces(line, env, r, v)
+    def end_forces(self, line, env, r, v, t=0.0):
+        force = self.nodal_forces(line, env, r, v, t)
         return force[0], force[-1]
 
 
@@ -109,6 +109,8 @@ def _drag(lt, env, u, tangent, stretched):
 def _seabed(lt, env, r, v, node_len):
     """Contact force (n+1, 3) [N]: (kBot·δ − cBot·ż)·d·l_node for penetration δ > 0."""
     bed = env.seabed
+    if bed.bathymetry is not None:
+        return _seabed_3d(lt, bed, r, v, node_len)
     depth_pen = -env.depth - r[:, 2]
     touching = depth_pen > 0
     area = lt.diameter * node_len
@@ -130,4 +132,29 @@ def _seabed(lt, env, r, v, node_len):
         uh = v[:, :2]
         speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
         force = force.at[:, :2].add(-(fr.mu * normal / speed)[:, None] * uh)
+    return force
+
+
+def _seabed_3d(lt, bed, r, v, node_len):
+    """Contact with a bathymetry grid, along the local seabed normal (n+1, 3) [N]."""
+    import jax
+
+    def height(xy):
+        return bed.bathymetry.height(xy[0], xy[1])
+
+    zb, grad = jax.vmap(jax.value_and_grad(height))(r[:, :2])
+    up = jnp.concatenate([-grad, jnp.ones_like(zb)[:, None]], axis=-1)
+    n = up / jnp.sqrt(jnp.sum(up * up, axis=-1, keepdims=True))  # never zero: n_z > 0
+    pen = (zb - r[:, 2]) * n[:, 2]
+    touching = pen > 0
+    area = lt.diameter * node_len
+    vn = jnp.sum(v * n, axis=-1)
+    normal = jnp.where(touching, bed.stiffness * pen * area, 0.0)
+    magnitude = normal - jnp.where(touching, bed.damping * vn * area, 0.0)
+    force = magnitude[:, None] * n
+    if bed.friction is not None:
+        fr = bed.friction
+        ut = v - vn[:, None] * n
+        speed = jnp.sqrt(jnp.sum(ut * ut, axis=-1) + fr.v_slip**2)
+        force = force - (fr.mu * normal / speed)[:, None] * ut
     return force

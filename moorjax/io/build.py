@@ -11,6 +11,10 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Seabed: ``kBot`` [Pa/m] and ``cBot`` [Pa·s/m] on d·l; ``FrictionCoefficient``
   > 0 adds smoothed Coulomb friction (slip velocity 0.01 m/s).
 - Coupled points hold their deck position unless a motion is given.
+- Free points (``Free``/``Point``/``Connect``) become
+  :class:`~moorjax.body.ConnectionPoint` s in ``Scene.bodies`` (file order),
+  their lines ending on them through ``BodyEnd(k, (0, 0, 0))``; the deck's
+  position is where the statics start (MoorDyn: the initial guess).
 - Bodies (``BODIES``): a point ``Body<n>`` is fixed in body n, its coordinates
   in body axes relative to the body's reference point (X0, Y0, Z0), placed at
   (X0, Y0, Z0) + R·p with MoorDyn's R = Rx(r0)·Ry(p0)·Rz(y0) (degrees in the
@@ -23,8 +27,16 @@ MoorDyn conventions kept (so a deck means the same in both codes):
   ``coupledpinned`` bodies are refused (:func:`build_scene` says why and what to
   do instead); a body's mass, CG, inertia, volume, CdA and Ca are not used.
 
+- Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
+  ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
+  environment's current; line drag acts on the velocity relative to it.
+
+- ``SeafloorFile``: the bathymetry grid becomes the seabed's
+  :class:`Bathymetry` (contact along the local seabed normal); the
+  environment's depth is the deepest of WtrDpth and the grid.
+
 Scene structure follows the deck: no drag / added mass terms when their
-coefficients are all zero, no seabed term when every line is buoyant.
+coefficients are all zero, no seabed term when every line is buoyant (wet weight < 0).
 """
 
 from __future__ import annotations
@@ -33,18 +45,23 @@ import warnings
 
 import numpy as np
 
+from ..body.point import ConnectionPoint
 from ..model import (
     AddedMass,
+    Bathymetry,
+    BodyEnd,
     Environment,
     FixedEnd,
     Line,
     LinearEA,
     LineType,
     MorisonDrag,
+    ProfileCurrent,
     Seabed,
     SeabedFriction,
     TabulatedEA,
     TabulatedPath,
+    TimeProfileCurrent,
 )
 from ..model.scene import Scene
 from .deck import Deck, DeckBody, DeckPoint, options_with_defaults
@@ -89,7 +106,11 @@ def _check_body_supported(deck: Deck, body: DeckBody) -> None:
     where = f"{deck.path}:{body.source_line}: BODIES id {body.id}"
     if body.attachment == "free":
         raise InputError(
-            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck. "
+            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck yet: "
+            "moorjax lacks MoorDyn's submerged 6-DOF body (weight at the CG and buoyancy rho*V*g "
+            "at the reference point with their moments at any rotation, per-DOF drag "
+            "0.5*rho*CdA*|v|v in body axes on the velocity relative to the water, added mass "
+            "rho*V*Ca, and the inertia of the points and line ends fixed in it). "
             "moorjax's moving body, moorjax.body.RigidBody, is a floating (Cummins-form) body: it "
             "needs a hydrostatic restoring matrix with positive heave stiffness C[2,2] [N/m] and "
             "added mass [kg], which a deck does not carry (it gives Mass, CG, I, Volume, CdA, Ca "
@@ -146,6 +167,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         raise InputError(f"--segments = {segments} must be an integer >= 1")
     opts = options_with_defaults(deck)
     depth, rho, g = float(opts["WtrDpth"]), float(opts["rho"]), float(opts["g"])
+    if deck.seafloor is not None:  # the environment's depth is the deepest water
+        depth = max(depth, -float(deck.seafloor.z.min()))
     if depth <= 0:
         raise InputError(f"{deck.path}: WtrDpth = {depth} m must be > 0")
 
@@ -160,9 +183,12 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
                 stacklevel=2,
             )
 
+    free_ids = [p.id for p in deck.points.values() if p.attachment == "free"]
     ends = {}
     for p in deck.points.values():
-        if p.body is not None:
+        if p.attachment == "free":
+            ends[p.id] = BodyEnd(free_ids.index(p.id), (0.0, 0.0, 0.0), p.position)
+        elif p.body is not None:
             ends[p.id] = _body_point_end(deck, p, motion)
         elif p.attachment == "coupled" and motion is not None and p.id in motion.positions:
             ends[p.id] = TabulatedPath(motion.t, motion.positions[p.id], motion.velocities[p.id])
@@ -178,9 +204,58 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         lines.append(Line(lt, dl.length, n, ends[dl.point_a], ends[dl.point_b], label=str(dl.id)))
 
     seabed = None
-    if any(w > 0 for w in weights):
+    # neutral lines (to rounding) can be pushed onto the seabed too
+    if any(w >= -1e-6 * float(ln.line_type.mass_per_length) * g for w, ln in zip(weights, lines)):
         mu = float(opts.get("FrictionCoefficient") or 0.0)
         friction = SeabedFriction(mu) if mu > 0 else None
-        seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction)
-    env = Environment(depth, rho, g, seabed=seabed)
-    return Scene(lines, env)
+        bathymetry = None
+        if deck.seafloor is not None:
+            sf = deck.seafloor
+            bathymetry = Bathymetry(sf.x, sf.y, sf.z)
+        seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
+    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
+    points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
+    return Scene(lines, env, bodies=points)
+
+
+def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) -> ConnectionPoint:
+    """A deck's free point as a :class:`ConnectionPoint` (MoorDyn's Point).
+
+    MoorDyn's point: weight M·g, buoyancy ρ·V·g, drag ½ρ·CdA·|u|u on the velocity
+    u relative to the water and added mass Ca·ρ·V; its inertia also holds the
+    end nodes of its lines (half an element's mass plus its added mass
+    ρA·(l/2)·Ca). The lines' end forces carry the end nodes' weight and drag,
+    so those end-node inertias go into ``added_mass`` (inertia only, no
+    weight): ΣμL/2 + ρA(l/2)·Ca_n, the normal Ca taken for every direction.
+    """
+    added = p.ca * rho * p.volume
+    for line, dl in zip(lines, deck.lines):
+        for end in ("a", "b"):
+            if getattr(dl, f"point_{end}") == p.id:
+                lt = line.line_type
+                half = 0.5 * float(line.segment_length)
+                added += float(lt.mass_per_length) * half
+                if lt.added_mass is not None:
+                    added += rho * float(lt.area) * half * float(lt.added_mass.ca_normal)
+    if not p.mass + added > 0:
+        raise InputError(
+            f"{deck.path}:{p.source_line}: POINTS id {p.id}: a free point with Mass = 0 kg, no "
+            "added mass and no line attached has no inertia; give it a Mass [kg] or attach a line")
+    return ConnectionPoint(p.mass, p.position, volume=p.volume, added_mass=added, cda=p.cda,
+                           rho=rho, g=g, label=f"P{p.id}",
+                           current=current if p.cda > 0 else None)
+
+
+def deck_current(deck: Deck):
+    """The deck's current as a moorjax current field, or ``None``.
+
+    ``Currents = 1``: a :class:`ProfileCurrent` (linear in z, held beyond the
+    ends, as MoorDyn's steady current grid); ``Currents = 2``: a
+    :class:`TimeProfileCurrent` (linear in z and t, held beyond the ends).
+    """
+    cur = deck.current
+    if cur is None:
+        return None
+    if cur.mode == 1:
+        return ProfileCurrent(cur.z, cur.velocity)
+    return TimeProfileCurrent(cur.t, cur.z, cur.velocity)

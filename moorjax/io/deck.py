@@ -15,13 +15,17 @@ The deck format (MoorDyn v2, also the v1 section names) is a plain-text file:
 Values are whitespace-separated; ``!``, ``#`` and ``%`` start a comment.
 Blank lines inside sections are skipped.
 
-Only what moorjax can simulate is accepted: lines between ``Fixed``/``Anchor``
-and ``Coupled``/``Vessel`` points and points fixed in bodies (``Body1``, ...).
+Only what moorjax can simulate is accepted: lines between ``Fixed``/``Anchor``,
+``Coupled``/``Vessel`` and ``Free``/``Connect`` points and points fixed in
+bodies (``Body1``, ...).
 ``BODIES`` rows of every kind (``fixed``, ``coupled``, ``free``,
 ``coupledpinned``) are read into :class:`DeckBody` records;
 :func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
-others with the reason.  Free points, rods, failures, external loads, waves,
-currents and 3-D bathymetry raise :class:`InputError` ("not supported yet").
+others with the reason.  Currents (``Currents`` 1 and 2) are read from
+MoorDyn's side files (:mod:`moorjax.io.currents`). Rods,
+failures, external loads, wave kinematics and 4-D current grids raise
+:class:`InputError` ("not supported yet"). ``SeafloorFile`` bathymetry
+grids are read (:mod:`moorjax.io.seafloor`).
 Everything is validated on reading; every error names ``file:line``, the
 field, the value as written, its unit and what is expected.
 
@@ -39,8 +43,10 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .currents import CURRENT_FILES, DeckCurrent, read_current_profile, read_dynamic_current_profile
 from .errors import InputError, InputWarning
 from .frames import body_point_positions
+from .seafloor import DeckSeafloor, find_seafloor_file, read_seafloor
 
 __all__ = [
     "DeckLineType",
@@ -99,12 +105,14 @@ class DeckLineType:
 
 @dataclass(frozen=True)
 class DeckPoint:
-    """One row of ``POINTS``: a line end held fixed, driven by the caller, or fixed in a body.
+    """One row of ``POINTS``: a line end held fixed, driven by the caller, free, or fixed in a body.
 
     Attributes:
         id: point number (1, 2, 3, ... in file order).
         attachment: ``'fixed'`` (Fixed/Anchor/Fix), ``'coupled'``
-            (Coupled/Vessel/Ves/Cpld/Fairlead) or ``'body'`` (Body<n>).
+            (Coupled/Vessel/Ves/Cpld/Fairlead), ``'free'`` (Free/Point/
+            Connect/Con: a point mass moved by its lines and loads; its
+            position is the initial guess) or ``'body'`` (Body<n>).
         position: (x, y, z) [m], global frame; for coupled points the initial
             position; for body points the position in the body's axes relative
             to its reference point (X0, Y0, Z0) (see :meth:`Deck.point_position`
@@ -224,6 +232,11 @@ class Deck:
             :func:`warnings.warn` as :class:`~moorjax.io.errors.InputWarning`).
         bodies: body id -> :class:`DeckBody`, in file order (empty without a
             ``BODIES`` section).
+        current: the current of a deck with ``Currents`` 1 or 2, read from
+            the file MoorDyn-C reads next to the deck
+            (:mod:`moorjax.io.currents`); ``None`` without currents.
+        seafloor: the bathymetry grid of a deck with ``SeafloorFile``
+            (:mod:`moorjax.io.seafloor`); ``None`` for a flat seabed.
     """
 
     path: str
@@ -234,6 +247,8 @@ class Deck:
     options: dict[str, float | str]
     warnings: tuple[str, ...]
     bodies: dict[int, DeckBody] = field(default_factory=dict)
+    current: DeckCurrent | None = None
+    seafloor: DeckSeafloor | None = None
 
     def point_position(self, point_id: int) -> tuple[float, float, float]:
         """Global position [m] of a point at the deck's initial poses (body
@@ -307,8 +322,8 @@ _OPTION_RULES: dict[str, tuple[str, str]] = {
     "writeLog": ("[-]", "any"),
     "dtM": ("s", "pos"),
     "CFL": ("[-]", "pos"),
-    "g": ("m/s^2", "pos"),
-    "rho": ("kg/m^3", "pos"),
+    "g": ("m/s^2", "nonneg"),  # MoorDyn runs g = 0 (weightless tests) and rho = 0 (in air)
+    "rho": ("kg/m^3", "nonneg"),
     "WtrDpth": ("m", "pos"),
     "kBot": ("Pa/m", "nonneg"),
     "cBot": ("Pa-s/m", "nonneg"),
@@ -646,11 +661,30 @@ def _parse_line_type(ctx: _Context, row: _Row) -> DeckLineType:
     ea_tok = t[3]
     ea: float | None = None
     ea_table = None
-    if "|" in ea_tok or ea_tok.upper().startswith("SYROPE:"):
+    if ea_tok.upper().startswith("SYROPE:"):
         raise ctx.error(
             row.lineno,
-            f"{what}: EA = {ea_tok!r}: viscoelastic / Syrope stiffness is not supported yet; "
-            "expected one EA in N or a stiffness-table file",
+            f"{what}: EA = {ea_tok!r}: the Syrope polyester model is not supported yet. moorjax lacks "
+            "(1) the load-path-dependent working curves (the original working curve OWC table and "
+            "the LINEAR/QUADRATIC/EXP curve with k1, k2 from the Syrope file), (2) the history "
+            "state per segment (highest and current mean tension, initialised from the SYROPE IC "
+            "section's Tmax0, Tmean0) and (3) the viscoelastic dynamic branch EA_d = EA_Dc + "
+            "EA_D_Lm*mean_load in series with the static one (an extra internal strain per "
+            "segment in the state). Expected one EA in N or a stiffness-table file",
+        )
+    if "|" in ea_tok:
+        n_parts = len(ea_tok.split("|"))
+        form = ("EA_s|EA_d: constant dynamic stiffness" if n_parts == 2
+                else "EA_s|EA_Dc|EA_D_Lm: load-dependent dynamic stiffness" if n_parts == 3
+                else f"{n_parts} '|'-separated values")
+        raise ctx.error(
+            row.lineno,
+            f"{what}: EA = {ea_tok!r} ({form}): MoorDyn's viscoelastic line model is not supported "
+            "yet. moorjax lacks the second (dynamic) spring-dashpot branch of each segment: an "
+            "internal strain per segment in the dynamic state with its own rate equation, the "
+            "dynamic stiffness EA_d (and, for three values, its dependence on the running mean "
+            "tension, EA_d = EA_Dc + EA_D_Lm*mean_load) and the dynamic damping BA_d from "
+            "'BA_s|BA_d'. Expected one EA in N or a stiffness-table file",
         )
     if _is_number(ea_tok) or _NONFINITE_RE.match(ea_tok):
         ea = _number(ctx, row, 3, what, "EA", "N", "pos")
@@ -661,8 +695,10 @@ def _parse_line_type(ctx: _Context, row: _Row) -> DeckLineType:
     if "|" in ba_tok:
         raise ctx.error(
             row.lineno,
-            f"{what}: BA/-zeta = {ba_tok!r}: static|dynamic damping is not supported yet; "
-            "expected one number (N-s, or -zeta if negative)",
+            f"{what}: BA/-zeta = {ba_tok!r}: static|dynamic damping (BA_s|BA_d) belongs to "
+            "MoorDyn's viscoelastic line model, which is not supported yet (moorjax lacks the "
+            "dynamic spring-dashpot branch per segment); expected one number (N-s, or -zeta if "
+            "negative)",
         )
     if not (_is_number(ba_tok) or _NONFINITE_RE.match(ba_tok)) and _resolve_side_file(ctx, ba_tok).is_file():
         raise ctx.error(
@@ -730,11 +766,7 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
     elif word in _COUPLED_WORDS and not rest:
         attachment = "coupled"
     elif word in _FREE_WORDS and not rest:
-        raise ctx.error(
-            row.lineno,
-            f"{what}: Attachment = {word_tok!r}: free points are not supported yet; "
-            "expected Fixed/Anchor or Coupled/Vessel",
-        )
+        attachment = "free"
     elif word == "BODY":
         if not re.fullmatch(r"\d+", rest) or int(rest) == 0:
             raise ctx.error(
@@ -753,7 +785,7 @@ def _parse_point(ctx: _Context, row: _Row) -> DeckPoint:
         raise ctx.error(
             row.lineno,
             f"{what}: Attachment = {word_tok!r} is not a known point type; expected one of "
-            "Fixed, Anchor, Coupled, Vessel, Body<n> (Free/Connect are not supported yet)",
+            "Fixed, Anchor, Coupled, Vessel, Free (Point, Connect), Body<n>",
         )
 
     x = _number(ctx, row, 2, what, "X", "m")
@@ -946,6 +978,33 @@ def _parse_line(ctx: _Context, row: _Row) -> DeckLine:
 # ----------------------------------------------------------------------------
 
 
+def _check_currents_mode(ctx: _Context, lineno: int, name: str, token: str, value: float) -> None:
+    """``Currents``: 0 none, 1 steady and 2 dynamic depth profiles are read
+    (:mod:`moorjax.io.currents`); 3 and 4 are not implemented in MoorDyn
+    either; 5 (4-D grid) is not supported yet."""
+    if value in (0, 1, 2):
+        return
+    if value in (3, 4):
+        raise ctx.error(
+            lineno,
+            f"OPTIONS: {name} = {token}: current mode {int(value)} (steady/dynamic currents at nodes) is "
+            "not implemented in MoorDyn v2 either; expected 0 (none), 1 (current_profile.txt) or "
+            "2 (current_profile_dynamic.txt)",
+        )
+    if value == 5:
+        raise ctx.error(
+            lineno,
+            f"OPTIONS: {name} = {token}: 4-D current grids (current_profile_4d.txt) are not supported "
+            "yet; expected 0 (none), 1 (steady depth profile, current_profile.txt) or 2 (depth profile "
+            "in time, current_profile_dynamic.txt)",
+        )
+    raise ctx.error(
+        lineno,
+        f"OPTIONS: {name} = {token} is not a MoorDyn current mode; expected 0, 1 or 2 "
+        "(3, 4: not implemented in MoorDyn; 5: 4-D grid, not supported yet)",
+    )
+
+
 def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | str], dict[str, int]]:
     options: dict[str, float | str] = {}
     where: dict[str, int] = {}
@@ -973,9 +1032,16 @@ def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | 
             value = value_tok.lower()
             key = canonical
         elif canonical == "SeafloorFile":
-            raise ctx.error(
-                row.lineno, f"{what}: SeafloorFile = {value_tok!r}: 3-D bathymetry is not supported yet"
-            )
+            found = find_seafloor_file(value_tok, ctx.path)
+            if found is None:
+                raise ctx.error(
+                    row.lineno,
+                    f"{what}: SeafloorFile = {value_tok!r}: no such file next to the deck or in its "
+                    "parent folders (MoorDyn resolves it from its working directory); give a path "
+                    "relative to the deck",
+                )
+            value = str(found)
+            key = canonical
         else:
             unit, constraint = _OPTION_RULES[canonical]
             if canonical == "WtrDpth" and not (_is_number(value_tok) or _NONFINITE_RE.match(value_tok)):
@@ -985,11 +1051,15 @@ def _parse_options(ctx: _Context, section: _Section) -> tuple[dict[str, float | 
                     "expected a water depth > 0 in m",
                 )
             value = _number(ctx, row, 0, what, name, unit, constraint)
-            if canonical in ("WaveKin", "Currents") and value != 0:
+            if canonical == "WaveKin" and value != 0:
                 raise ctx.error(
                     row.lineno,
-                    f"{what}: {name} = {value_tok}: waves and currents are not supported yet; expected 0",
+                    f"{what}: {name} = {value_tok}: wave kinematics on lines are not supported yet "
+                    "(MoorDyn's WaveKin 1 external, 2 FFT grid, 3 elevation grid, 7 component sum); "
+                    "expected 0",
                 )
+            if canonical == "Currents":
+                _check_currents_mode(ctx, row.lineno, name, value_tok, value)
             key = canonical
         if key in options:
             ctx.warn(
@@ -1065,6 +1135,19 @@ def _parse(text: str, ctx: _Context) -> Deck:
     option_lines: dict[str, int] = {}
     if "OPTIONS" in sections:
         options, option_lines = _parse_options(ctx, sections["OPTIONS"])
+
+    # --- currents: the file MoorDyn-C reads from the deck's folder
+    current = None
+    mode = int(options.get("Currents", 0))
+    if mode:
+        origin = f"{ctx.path}:{option_lines['Currents']}: OPTIONS: Currents = {mode}"
+        side = Path(ctx.path).parent / CURRENT_FILES[mode]
+        reader = read_current_profile if mode == 1 else read_dynamic_current_profile
+        current = reader(side, origin)
+
+    seafloor = None
+    if "SeafloorFile" in options:
+        seafloor = read_seafloor(options["SeafloorFile"])
 
     # --- unsupported object sections
     for kind, what in (
@@ -1204,6 +1287,8 @@ def _parse(text: str, ctx: _Context) -> Deck:
         options=options,
         warnings=tuple(ctx.warnings),
         bodies=bodies,
+        current=current,
+        seafloor=seafloor,
     )
 
 

@@ -13,8 +13,10 @@ from .ends import KinematicEnd as KinematicEnd
 from .ends import SinePath as SinePath
 from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
+from .environment import Bathymetry as Bathymetry
 from .environment import Environment as Environment
 from .environment import ProfileCurrent as ProfileCurrent
+from .environment import TimeProfileCurrent as TimeProfileCurrent
 from .environment import Seabed as Seabed
 from .environment import SeabedFriction as SeabedFriction
 from .environment import UniformCurrent as UniformCurrent
@@ -32,6 +34,7 @@ __all__ = [
     'AddedMass',
     'Bilateral',
     'Environment',
+    'Bathymetry',
     'BodyEnd',
     'FixedEnd',
     'KinematicEnd',
@@ -43,6 +46,7 @@ __all__ = [
     'PolyesterMBL',
     'PolyesterWu',
     'ProfileCurrent',
+    'TimeProfileCurrent',
     'Scene',
     'Seabed',
     'SeabedFriction',

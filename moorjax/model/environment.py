@@ -37,36 +37,87 @@ class SeabedFriction(eqx.Module):
         self.v_slip = jnp.asarray(v_slip, dtype=float)
 
 
+class Bathymetry(eqx.Module):
+    """A seabed height grid z_b(x, y) [m] (MoorDyn's ``SeafloorFile``), bilinear
+    inside the grid and held at the nearest edge outside it (as MoorDyn).
+
+    Args:
+        x: (nx,) increasing grid x [m]; y: (ny,) increasing grid y [m].
+        z: (nx, ny) seabed heights [m] (negative below the surface).
+    """
+
+    x: Array
+    y: Array
+    z: Array
+
+    def __init__(self, x, y, z):
+        x, y, z = (jnp.asarray(a, dtype=float) for a in (x, y, z))
+        if x.ndim != 1 or y.ndim != 1 or z.shape != (x.shape[0], y.shape[0]):
+            raise ValueError(f"bathymetry needs x (nx,), y (ny,), z (nx, ny); got {x.shape}, {y.shape}, "
+                             f"{z.shape}")
+        for arr, name in ((x, "x"), (y, "y")):
+            check_finite(arr, f"bathymetry {name}", "m")
+            if arr.shape[0] > 1 and not bool(jnp.all(jnp.diff(arr) > 0)):
+                raise ValueError(f"bathymetry grid {name} [m] must be strictly increasing")
+        check_finite(z, "bathymetry heights", "m")
+        self.x, self.y, self.z = x, y, z
+
+    def height(self, x, y):
+        """Seabed height z_b [m] at (x, y) (any equal shapes), bilinear, clamped."""
+        i, fx = _bracket(self.x, x)
+        j, fy = _bracket(self.y, y)
+        i1 = jnp.minimum(i + 1, self.x.shape[0] - 1)
+        j1 = jnp.minimum(j + 1, self.y.shape[0] - 1)
+        z = self.z
+        return ((1 - fx) * (1 - fy) * z[i, j] + fx * (1 - fy) * z[i1, j]
+                + (1 - fx) * fy * z[i, j1] + fx * fy * z[i1, j1])
+
+    def lowest(self) -> float:
+        """The deepest seabed height [m] (concrete grids only)."""
+        return float(jnp.min(self.z))
+
+
 class Seabed(eqx.Module):
     """Vertical spring–damper contact (MoorDyn's kBot/cBot), optional friction.
 
     Contact pressure per unit line length and diameter: kBot·δ − cBot·ż for a
     penetration δ > 0, so the force on a node is (kBot·δ − cBot·ż)·d·l_node.
 
+    With a :class:`Bathymetry` the seabed is z_b(x, y) instead of the flat
+    z = −depth, and the contact acts along the local normal n of the seabed
+    surface: penetration δ = (z_b − z)·n_z (the distance below its tangent
+    plane), force (kBot·δ − cBot·v·n)·d·l_node·n, friction on the velocity
+    along the surface. (MoorDyn v2 takes the local depth but keeps the contact
+    vertical; the two agree to O(slope²).)
+
     Args:
         stiffness: kBot [Pa/m].
         damping: cBot [Pa·s/m].
         friction: optional :class:`SeabedFriction`.
+        bathymetry: optional :class:`Bathymetry` (default: flat at −depth).
     """
 
     stiffness: Array
     damping: Array
     friction: SeabedFriction | None
+    bathymetry: Bathymetry | None = None
 
-    def __init__(self, stiffness=3e6, damping=3e5, friction: SeabedFriction | None = None):
+    def __init__(self, stiffness=3e6, damping=3e5, friction: SeabedFriction | None = None,
+                 bathymetry: Bathymetry | None = None):
         check_positive(stiffness, "seabed stiffness kBot", "Pa/m")
         check_nonnegative(damping, "seabed damping cBot", "Pa·s/m")
         self.stiffness = jnp.asarray(stiffness, dtype=float)
         self.damping = jnp.asarray(damping, dtype=float)
         self.friction = friction
+        self.bathymetry = bathymetry
 
 
 class AbstractCurrent(eqx.Module):
-    """A steady current field U(z) [m/s]."""
+    """A current field U(z, t) [m/s] (steady fields ignore t)."""
 
     @abc.abstractmethod
-    def velocity(self, z: Array) -> Array:
-        """Current velocity (..., 3) [m/s] at heights z (...) [m]."""
+    def velocity(self, z: Array, t=0.0) -> Array:
+        """Current velocity (..., 3) [m/s] at heights z (...) [m] and time t [s]."""
 
 
 class UniformCurrent(AbstractCurrent):
@@ -78,7 +129,7 @@ class UniformCurrent(AbstractCurrent):
         check_finite(velocity, "current velocity", "m/s")
         self.u = jnp.asarray(velocity, dtype=float).reshape(3)
 
-    def velocity(self, z):
+    def velocity(self, z, t=0.0):
         return jnp.broadcast_to(self.u, jnp.shape(z) + (3,))
 
 
@@ -104,14 +155,65 @@ class ProfileCurrent(AbstractCurrent):
             raise ValueError("current profile heights z [m] must be strictly increasing")
         self.z, self.u = z, u
 
-    def velocity(self, z):
+    def velocity(self, z, t=0.0):
         zf = jnp.ravel(z)
         out = jnp.stack([jnp.interp(zf, self.z, self.u[:, i]) for i in range(3)], axis=-1)
         return out.reshape(jnp.shape(z) + (3,))
 
 
+def _bracket(grid, x):
+    """Index i and weight f with x ≈ (1 − f)·grid[i] + f·grid[i+1], clamped to the ends."""
+    if grid.shape[0] == 1:
+        return jnp.zeros(jnp.shape(x), int), jnp.zeros(jnp.shape(x))
+    i = jnp.clip(jnp.searchsorted(grid, x, side="right") - 1, 0, grid.shape[0] - 2)
+    f = jnp.clip((x - grid[i]) / (grid[i + 1] - grid[i]), 0.0, 1.0)
+    return i, f
+
+
+class TimeProfileCurrent(AbstractCurrent):
+    """A depth profile that changes in time (MoorDyn's ``Currents = 2``).
+
+    Bilinear in z and t, held at the values of the nearest end beyond the
+    tabulated heights and times (MoorDyn v2 docs, "Currents = 2 (Dynamic
+    Currents Grid)": "a point outside of the defined grid (either in z value or
+    in time) will use the nearest value").
+
+    Args:
+        t: (n_t,) increasing times [s].
+        z: (k,) increasing heights [m] (negative below the surface).
+        velocity: (n_t, k, 3) current velocities [m/s].
+    """
+
+    t: Array
+    z: Array
+    u: Array
+
+    def __init__(self, t, z, velocity):
+        t = jnp.asarray(t, dtype=float)
+        z = jnp.asarray(z, dtype=float)
+        u = jnp.asarray(velocity, dtype=float)
+        if t.ndim != 1 or z.ndim != 1 or u.shape != (t.shape[0], z.shape[0], 3):
+            raise ValueError(f"a time-varying current profile needs t (n,), z (k,) and velocity "
+                             f"(n, k, 3); got {t.shape}, {z.shape}, {u.shape}")
+        for arr, name, unit in ((t, "t", "s"), (z, "z", "m"), (u, "velocity", "m/s")):
+            check_finite(arr, f"current profile {name}", unit)
+        for arr, name, unit in ((t, "times t", "s"), (z, "heights z", "m")):
+            if arr.shape[0] > 1 and not bool(jnp.all(jnp.diff(arr) > 0)):
+                raise ValueError(f"current profile {name} [{unit}] must be strictly increasing")
+        self.t, self.z, self.u = t, z, u
+
+    def velocity(self, z, t=0.0):
+        it, ft = _bracket(self.t, jnp.asarray(t, dtype=float))
+        j = jnp.minimum(it + 1, self.t.shape[0] - 1)
+        profile = (1.0 - ft) * self.u[it] + ft * self.u[j]  # (k, 3) at time t
+        zf = jnp.ravel(z)
+        out = jnp.stack([jnp.interp(zf, self.z, profile[:, i]) for i in range(3)], axis=-1)
+        return out.reshape(jnp.shape(z) + (3,))
+
+
 class Environment(eqx.Module):
-    """Water depth [m], density ρ [kg/m³], gravity g [m/s²], optional seabed/current."""
+    """Water depth [m], density ρ [kg/m³] (≥ 0; 0 is air), gravity g [m/s²]
+    (≥ 0), optional seabed/current."""
 
     depth: Array
     rho: Array
@@ -122,8 +224,10 @@ class Environment(eqx.Module):
     def __init__(self, depth, rho=1025.0, g=9.80665, seabed: Seabed | None = None,
                  current: AbstractCurrent | None = None):
         check_positive(depth, "water depth", "m")
-        check_positive(rho, "water density", "kg/m³")
-        check_positive(g, "gravity", "m/s²")
+        # zero is allowed, as in MoorDyn: rho = 0 is a line in air (no buoyancy,
+        # drag or added mass), g = 0 a weightless system
+        check_nonnegative(rho, "water density", "kg/m³")
+        check_nonnegative(g, "gravity", "m/s²")
         self.depth = jnp.asarray(depth, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
         self.g = jnp.asarray(g, dtype=float)

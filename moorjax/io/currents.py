@@ -1,0 +1,144 @@
+"""Readers for MoorDyn-C v2's current files (the ``Currents`` option).
+
+MoorDyn v2 documents the option and its files in ``docs/inputs.rst``
+(OPTIONS: ``Currents``) and ``docs/waterkinematics.rst`` ("Currents
+(MoorDyn-C)"); each file sits in the deck's folder under a fixed name:
+
+* ``Currents = 1`` (steady currents grid): ``current_profile.txt``. The first
+  three lines are ignored; every further line is ``z ux [uy [uz]]`` with z [m]
+  (z up, 0 at the still surface) and the velocity [m/s]; a missing uy or uz
+  is 0. The velocity at a point is linearly interpolated in z between the
+  nearest rows and held at the end values beyond them.
+* ``Currents = 2`` (dynamic currents grid): ``current_profile_dynamic.txt``.
+  Lines 1-4 are ignored, line 5 lists the depths z [m], line 6 is ignored, and
+  every further line is ``t ux_1..ux_k [uy_1..uy_k [uz_1..uz_k]]`` (time [s],
+  then all x components by depth, then y, then z; missing components are 0).
+  Linear in z and t, held at the ends of both.
+* ``Currents = 3, 4`` are not implemented in MoorDyn either; ``5`` (a 4-D grid
+  from ``current_profile_4d.txt``) is not supported by moorjax yet.
+
+Pure Python + numpy; no JAX.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["DeckCurrent", "read_current_profile", "read_dynamic_current_profile", "CURRENT_FILES"]
+
+#: ``Currents`` option value -> the file MoorDyn-C reads from the deck's folder.
+CURRENT_FILES = {1: "current_profile.txt", 2: "current_profile_dynamic.txt", 5: "current_profile_4d.txt"}
+
+
+@dataclass(frozen=True)
+class DeckCurrent:
+    """A current read from a MoorDyn current file.
+
+    Attributes:
+        mode: the deck's ``Currents`` value (1 steady profile, 2 dynamic profile).
+        path: the file it came from.
+        z: (k,) strictly increasing heights [m].
+        velocity: (k, 3) [m/s] for mode 1; (n_t, k, 3) [m/s] for mode 2.
+        t: (n_t,) strictly increasing times [s] for mode 2, else ``None``.
+    """
+
+    mode: int
+    path: str
+    z: np.ndarray
+    velocity: np.ndarray
+    t: np.ndarray | None = None
+
+
+def _numbers(path: str, lineno: int, raw: str, what: str) -> list[float]:
+    out = []
+    for tok in raw.replace(",", " ").split():
+        try:
+            v = float(tok)
+        except ValueError:
+            raise InputError(f"{path}:{lineno}: {what}: {tok!r} is not a number (row {raw.strip()!r})") from None
+        if not math.isfinite(v):
+            raise InputError(f"{path}:{lineno}: {what}: {tok} must be a finite number")
+        out.append(v)
+    return out
+
+
+def _check_increasing(path, linenos, values, name, unit):
+    for i in range(1, len(values)):
+        if not values[i] > values[i - 1]:
+            raise InputError(
+                f"{path}:{linenos[i]}: {name} = {values[i]!r} {unit} is not greater than the previous "
+                f"{values[i - 1]!r} {unit}; MoorDyn interpolates in {name} and needs them strictly "
+                "increasing")
+
+
+def _read_lines(path: Path, origin: str) -> list[str]:
+    if not path.is_file():
+        raise InputError(f"{origin}: the current file {str(path)!r} does not exist (MoorDyn reads it "
+                         "from the deck's folder under this fixed name)")
+    return path.read_text(encoding="utf-8", errors="replace").splitlines()
+
+
+def read_current_profile(path, origin: str = "") -> DeckCurrent:
+    """Read a ``current_profile.txt`` (``Currents = 1``); see the module docstring.
+
+    Args:
+        path: the file.
+        origin: where the deck asked for it (``deck:line``), for messages.
+    """
+    path = Path(path)
+    lines = _read_lines(path, origin or str(path))
+    z, u, where = [], [], []
+    for lineno, raw in enumerate(lines[3:], start=4):
+        if not raw.strip():
+            continue
+        vals = _numbers(str(path), lineno, raw, "steady current row 'z ux [uy [uz]]'")
+        if len(vals) < 2:
+            raise InputError(f"{path}:{lineno}: steady current row {raw.strip()!r} has {len(vals)} "
+                             "number(s); expected 'z [m] ux [m/s] [uy [m/s] [uz [m/s]]]'")
+        z.append(vals[0])
+        u.append((vals[1:4] + [0.0, 0.0])[:3])
+        where.append(lineno)
+    if not z:
+        raise InputError(f"{path}: no current rows after the 3 header lines; expected rows "
+                         "'z [m] ux [m/s] [uy [m/s] [uz [m/s]]]'")
+    _check_increasing(str(path), where, z, "z", "m")
+    return DeckCurrent(1, str(path), np.asarray(z, float), np.asarray(u, float))
+
+
+def read_dynamic_current_profile(path, origin: str = "") -> DeckCurrent:
+    """Read a ``current_profile_dynamic.txt`` (``Currents = 2``); see the module docstring."""
+    path = Path(path)
+    lines = _read_lines(path, origin or str(path))
+    if len(lines) < 7:
+        raise InputError(f"{path}: {len(lines)} lines; a dynamic current file has 4 ignored lines, "
+                         "the depths on line 5, an ignored line 6 and then 't ux.. [uy.. [uz..]]' rows")
+    z = _numbers(str(path), 5, lines[4], "depths row (line 5)")
+    if not z:
+        raise InputError(f"{path}:5: the depths row is empty; expected the heights z [m] of the profile")
+    _check_increasing(str(path), [5] * len(z), z, "z", "m")
+    k = len(z)
+    ts, us, where = [], [], []
+    for lineno, raw in enumerate(lines[6:], start=7):
+        if not raw.strip():
+            continue
+        vals = _numbers(str(path), lineno, raw, "dynamic current row")
+        if len(vals) not in (1 + k, 1 + 2 * k, 1 + 3 * k):
+            raise InputError(
+                f"{path}:{lineno}: dynamic current row has {len(vals)} numbers; with {k} depths expected "
+                f"{1 + k} (t, ux), {1 + 2 * k} (t, ux, uy) or {1 + 3 * k} (t, ux, uy, uz)")
+        comp = np.zeros((3, k))
+        n_c = (len(vals) - 1) // k
+        comp[:n_c] = np.asarray(vals[1:]).reshape(n_c, k)
+        ts.append(vals[0])
+        us.append(comp.T)
+        where.append(lineno)
+    if not ts:
+        raise InputError(f"{path}: no time rows after line 6")
+    _check_increasing(str(path), where, ts, "t", "s")
+    return DeckCurrent(2, str(path), np.asarray(z, float), np.asarray(us, float), np.asarray(ts, float))

@@ -1,0 +1,119 @@
+"""3-D seabed from MoorDyn's ``SeafloorFile`` bathymetry grids.
+
+- the grid file is read as MoorDyn v2 documents it (docs/inputs.rst,
+  "Seafloor/Bathymetry File"), bad grids are named by file and line;
+- heights are bilinear inside the grid and held at the nearest edge outside;
+- a flat grid at −depth gives exactly the flat seabed's contact forces (with
+  friction), at random node positions and velocities;
+- on a tilted plane the contact force is along the plane's normal with the
+  magnitude kBot·(distance below the plane)·d·l, and friction opposes the
+  sliding velocity along the plane;
+- MoorDyn's own deck ``tests/Mooring/seafloor.txt`` (a pendulum over the
+  sloped grid ``seafloor_profile_3d.txt``, copied to ``tests/data/seafloor/``)
+  is read and built with its grid.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import moorjax as mj
+from moorjax.element import LinearElement
+from moorjax.io import build_scene, read_deck
+from moorjax.io.errors import InputError
+from moorjax.io.seafloor import read_seafloor
+from moorjax.model import Bathymetry, Seabed, SeabedFriction
+
+DATA = Path(__file__).parent / "data" / "seafloor"
+
+
+def test_moordyn_grid_file_and_deck():
+    sf = read_seafloor(DATA / "seafloor_profile_3d.txt")
+    assert sf.z.shape == (100, 5)
+    np.testing.assert_allclose(sf.z[0], -40.0)
+    deck = read_deck(DATA / "pendulum.txt")
+    scene = build_scene(deck)
+    bed = scene.env.seabed.bathymetry
+    assert isinstance(bed, Bathymetry)
+    # the grid rises from -40 m at x = -50 m by 0.2 m per m along x
+    np.testing.assert_allclose(bed.height(jnp.array(0.0), jnp.array(0.3)), sf.z[:, 0].mean(), atol=1e-9)
+    np.testing.assert_allclose(bed.height(jnp.array(-80.0), jnp.array(9.0)), -40.0)  # held at the edge
+
+
+def test_bad_grid_rows_are_named(tmp_path):
+    f = tmp_path / "g.txt"
+    f.write_text("2 2\n0 1\n0 1\n0 0 -10\n0 1 -10\n1 0 -10\n1 0.5 -10\n")
+    with pytest.raises(InputError, match=r"g.txt:7: point \(1.0, 0.5\) m is not on the grid"):
+        read_seafloor(f)
+    f.write_text("2 2\n0 1\n0 1\n0 0 -10\n0 1 -10\n1 0 -10\n")
+    with pytest.raises(InputError, match=r"no depth for grid point \(1.0, 1.0\) m"):
+        read_seafloor(f)
+
+
+def _line(n=6):
+    lt = mj.LineType(0.1, 50.0, 1e8)
+    return mj.Line(lt, 60.0, n, mj.FixedEnd((0.0, 0.0, -50.0)), mj.FixedEnd((55.0, 0.0, -50.0)))
+
+
+def test_flat_grid_equals_flat_seabed():
+    rng = np.random.default_rng(0)
+    line = _line()
+    r = jnp.asarray(rng.normal(size=(7, 3)) * [20, 5, 0.05] + [25, 0, -50])
+    v = jnp.asarray(rng.normal(size=(7, 3)) * 0.2)
+    friction = SeabedFriction(0.6)
+    flat = mj.Environment(50.0, seabed=Seabed(3e6, 3e5, friction))
+    grid = Bathymetry([-100.0, 0.0, 200.0], [-10.0, 10.0], np.full((3, 2), -50.0))
+    gridded = mj.Environment(50.0, seabed=Seabed(3e6, 3e5, friction, grid))
+    el = LinearElement()
+    np.testing.assert_allclose(el.nodal_forces(line, gridded, r, v), el.nodal_forces(line, flat, r, v),
+                               rtol=1e-12, atol=1e-9)
+
+
+def test_tilted_plane_contact_is_normal_to_the_seabed():
+    slope = 0.2  # z_b = -50 + 0.2 x
+    grid = Bathymetry([0.0, 100.0], [-10.0, 10.0], [[-50.0, -50.0], [-30.0, -30.0]])
+    n = np.array([-slope, 0.0, 1.0]) / np.hypot(slope, 1.0)
+    line = _line()
+    env = mj.Environment(60.0, rho=0.0, g=0.0, seabed=Seabed(3e6, 0.0, None, grid))
+    x = np.linspace(0.0, 55.0, 7)
+    depth_below = 0.01  # [m] below the plane, measured along its normal
+    r = np.stack([x, np.zeros(7), -50.0 + slope * x], axis=1) - depth_below * n
+    # a straight, unstretched line lying in the plane: only contact acts on interior nodes
+    r = jnp.asarray(r)
+    seg = np.linalg.norm(np.diff(np.asarray(r), axis=0), axis=1)
+    line = mj.Line(line.line_type, float(seg.sum()), 6, mj.FixedEnd(r[0]), mj.FixedEnd(r[-1]))
+    f = np.asarray(LinearElement().nodal_forces(line, env, r, jnp.zeros_like(r)))[1:-1]
+    expected = 3e6 * depth_below * 0.1 * float(line.segment_length)
+    np.testing.assert_allclose(f, np.outer(np.full(5, expected), n), rtol=1e-9, atol=1e-6)
+
+    # friction opposes sliding along the plane, not the normal velocity
+    env = mj.Environment(60.0, rho=0.0, g=0.0,
+                         seabed=Seabed(3e6, 0.0, SeabedFriction(0.5, v_slip=1e-6), grid))
+    along = np.array([1.0, 0.0, slope]) / np.hypot(slope, 1.0)
+    v = jnp.asarray(np.tile(0.3 * along + 0.05 * n, (7, 1)))
+    f = np.asarray(LinearElement().nodal_forces(line, env, r, v))[1:-1]
+    tangential = f - np.outer(f @ n, n)
+    np.testing.assert_allclose(tangential, np.outer(np.full(5, -0.5 * expected), along), rtol=1e-6, atol=1e-6)
+
+
+def test_line_resting_on_a_sloped_seabed_matches_moorpy_inclined_catenary():
+    """Statics on a seabed rising 0.1 m per m along the line: MoorPy's catenary
+    with a seabed incline alpha = atan(0.1) (stiff bed, kBot = 3e8 Pa/m)."""
+    from moorpy.Catenary import catenary
+
+    slope, w, d = 0.1, 500.0, 0.1
+    grid = Bathymetry([-100.0, 300.0], [-10.0, 10.0], [[-60.0, -60.0], [-20.0, -20.0]])
+    lt = mj.LineType(d, w / 9.80665 + 1025.0 * np.pi * d**2 / 4, 1e9)
+    line = mj.Line(lt, 100.0, 40, mj.FixedEnd((0.0, 0.0, -50.0)), mj.FixedEnd((80.0, 0.0, -5.0)))
+    env = mj.Environment(70.0, seabed=Seabed(3e8, 0.0, None, grid))
+    from moorjax.statics import solve_line_statics
+
+    st = solve_line_statics(line, env)
+    fah, fav, fbh, fbv, info = catenary(80.0, 45.0, 100.0, 1e9, w, CB=0, alpha=np.degrees(np.arctan(slope)))
+    assert info["LBot"] > 30  # a third of the line lies on the slope
+    np.testing.assert_allclose(float(st.tension_b), np.hypot(fbh, fbv), rtol=1e-3)
+    np.testing.assert_allclose(float(st.tension_a), np.hypot(fah, fav), rtol=1e-3)
