@@ -104,9 +104,21 @@ def cmd_statics(args) -> int:
     from .statics import solve_line_statics
 
     _, scene, _ = _load(args)
+    if scene.bodies:
+        # free points and bodies move to their equilibrium with the lines
+        from .statics.system import solve_system_statics
+
+        system = solve_system_statics(scene, throw=False)
+        if not system.converged:
+            raise RuntimeError(
+                "system statics (free points and bodies with their lines) did not converge: "
+                f"force imbalance {float(np.max(np.abs(np.asarray(system.residual)))):.3g} N "
+                f"after {system.iterations} Newton iterations")
+        statics = system.lines
+    else:
+        statics = [solve_line_statics(line, scene.env, throw=False) for line in scene.lines]
     rows = []
-    for line in scene.lines:
-        st = solve_line_statics(line, scene.env, throw=False)
+    for line, st in zip(scene.lines, statics):
         st = jax.device_get(st)
         if not bool(st.converged):
             raise RuntimeError(

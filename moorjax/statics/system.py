@@ -156,8 +156,11 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         size = np.max(np.abs(g_np))
         for _ in range(6):
             trial = poses + jnp.asarray(step)
-            new = _line_statics_at(scene, trial, t, inits)
-            ok = all(bool(x.converged) for x in new)
+            try:
+                new = _line_statics_at(scene, trial, t, inits)
+                ok = all(bool(x.converged) for x in new)
+            except ValueError:  # the trial put a line end under the bed or out of reach
+                ok = False
             if ok:
                 ends = [(x.force_a, x.force_b) for x in new]
                 w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(trial), ends))
@@ -165,9 +168,10 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
                 if np.max(np.abs(g_trial)) < size:
                     break
             step = 0.5 * step
+        if not ok:  # no trial step was admissible: stop at the last good poses
+            break
         poses = trial
-        if ok:
-            inits = tuple(x.state() for x in new)
+        inits = tuple(x.state() for x in new)
     st = _line_statics_at(scene, poses, t, inits)
     wrench = mooring_wrench(scene, poses, t, inits)
     residual = body_forces(scene, poses, t, loads) + wrench
