@@ -21,8 +21,9 @@ its source is in ``wu_box.ASSUMPTIONS``; "Lnnn" below is a line of the paper's t
    ensemble per material from the loaded equilibrium; records of ``--case-duration``
    after a ``--case-transient``; per case the standard deviation across the four
    lines of the peak and of the mean force, averaged over the cases. Full mode
-   makes each record at least three undamped surge periods of that material
-   (periods from the AD stiffness at the base equilibrium);
+   makes each record three undamped surge periods of that material, the longer of
+   those at the base current and at half of it (the lowest drawn), from the AD
+   stiffness at the loaded equilibrium;
 6. convergence of the headline ratios: segments per line and tolerances (the
    paper's Hermite element does not exist in moorjax yet);
 7. ``table.md`` and ``summary.json`` (every number and run time), ``--json PATH``
@@ -331,7 +332,7 @@ def main(argv=None):
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--json", help="write the claims and the table's figures here")
     p.add_argument("--quick", action="store_true",
-                   help="short records and 8 uniformity cases (about 30 min on 2 loaded cores)")
+                   help="200 s records, 8 uniformity cases of 300 s (about 45 min on 2 loaded cores, mostly compilation)")
     p.add_argument("--duration", type=float, default=600.0, help="dynamic runs [s]")
     p.add_argument("--transient", type=float, default=100.0, help="start-up left out of means [s]")
     p.add_argument("--currents", type=float, nargs="+", default=[wu.CURRENT, wu.CURRENT_GUESS],
