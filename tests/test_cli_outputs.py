@@ -420,3 +420,11 @@ def test_stats_come_from_one_run(tmp_path, monkeypatch):
     stats = json.loads([ln for ln in err.splitlines() if ln.startswith("{")][0])
     assert len(calls) == 1
     assert stats["compile_s"] >= 0 and stats["run_s"] > 0 and stats["steps"] > 0
+
+
+def test_fit_callback_gets_the_gradient_norm_where_it_asks():
+    from moorjax.identify.fit import _takes_grad_norm
+
+    assert _takes_grad_norm(lambda it, values, loss, grad_norm=None: None)
+    assert _takes_grad_norm(lambda it, values, loss, **kw: None)
+    assert not _takes_grad_norm(lambda it, values, loss: None)

@@ -139,9 +139,10 @@ def cmd_fit(args) -> int:
     prog.say(f"{len(names)} parameter(s), up to {args.steps} steps; compiling the simulation and "
              "its gradient (a minute or more)…")
 
-    def report(it, values, loss):
+    def report(it, values, loss, grad_norm=None):
         vals = ", ".join(f"{k} {v:.6g}" for k, v in values.items())
-        prog.say(f"step {it}/{args.steps}: loss {loss:.6g}; {vals} ({prog.elapsed():.0f} s)")
+        grad = "" if grad_norm is None else f", |gradient| {grad_norm:.3g}"
+        prog.say(f"step {it}/{args.steps}: loss {loss:.6g}{grad}; {vals} ({prog.elapsed():.0f} s)")
 
     res = fit(
         exp, free, optimizer=opt, steps=args.steps, dt=args.dt, solver=args.solver,

@@ -192,6 +192,17 @@ def default_optimizer():
     return optax.lbfgs(linesearch=None)
 
 
+
+def _takes_grad_norm(callback) -> bool:
+    """Whether a fit callback accepts the ``grad_norm`` keyword."""
+    import inspect
+
+    try:
+        params = inspect.signature(callback).parameters.values()
+    except (TypeError, ValueError):
+        return False
+    return any(p.name == "grad_norm" or p.kind is p.VAR_KEYWORD for p in params)
+
 def fit(
     experiments,
     free,
@@ -231,7 +242,8 @@ def fit(
             mode: one compiled Jacobian per experiment structure).
         noise: measurement noise std [N] (scalar or one per experiment) for the
             covariance; default: estimated from each experiment's residuals.
-        callback: called as ``callback(iteration, values_dict, loss)`` after each step.
+        callback: called as ``callback(iteration, values_dict, loss)`` after each step,
+            with ``grad_norm=`` |∇_u loss| as well where it takes that keyword.
 
     Raises:
         ValueError: bad free-parameter names, a parameter an experiment's scene
@@ -339,7 +351,11 @@ def fit(
         ev = accepted
         history.append(ev.loss)
         if callback is not None:
-            callback(it, dict(zip(names, (float(x) for x in transform.to_physical(u)))), ev.loss)
+            values = dict(zip(names, (float(x) for x in transform.to_physical(u))))
+            if _takes_grad_norm(callback):
+                callback(it, values, ev.loss, grad_norm=float(np.linalg.norm(ev.grad_u)))
+            else:
+                callback(it, values, ev.loss)
         small_decrease = small_decrease + 1 if prev - ev.loss <= ftol * prev else 0
         if small_decrease >= 2:
             status, message = "converged", f"loss decrease below ftol = {ftol:g} (relative) twice"
