@@ -23,7 +23,7 @@ import numpy as np
 from jaxtyping import Array
 
 from ..body.coupling import attach, mooring_wrenches
-from .fem import LineStatics, _check_geometry, solve_line_statics
+from .fem import LineStatics, _check_geometry, _solve_core
 
 
 class SystemStatics(eqx.Module):
@@ -58,7 +58,10 @@ def _line_statics_at(scene, poses, t, inits=None):
     vel = [jnp.zeros(6)] * len(scene.bodies)
     lines = attach(scene.lines, scene.bodies, list(poses), vel)
     inits = (None,) * len(lines) if inits is None else inits
-    return tuple(solve_line_statics(ln, scene.env, t, init=i, throw=False)
+    # no end-below-the-bed check here: a free point resting on the seabed sinks to
+    # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
+    # a failed line solve is reported by ``converged``
+    return tuple(_solve_core(ln, scene.env, jnp.asarray(t, dtype=float), i, 1e-10, 1e-8, 500)
                  for ln, i in zip(lines, inits))
 
 
