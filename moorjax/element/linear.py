@@ -110,22 +110,13 @@ def _seabed(lt, env, r, v, node_len):
     """Contact force (n+1, 3) [N]: (kBot·δ − cBot·ż)·d·l_node for penetration δ > 0."""
     bed = env.seabed
     if bed.bathymetry is not None:
-        return _seabed_3d(lt, bed, r, v, node_len)
+        return _seabed_3d(lt, bed, env, r, v, node_len)
     depth_pen = -env.depth - r[:, 2]
     touching = depth_pen > 0
     area = lt.diameter * node_len
     normal = jnp.where(touching, bed.stiffness * depth_pen * area, 0.0)
     vertical = normal - jnp.where(touching, bed.damping * v[:, 2] * area, 0.0)
-    # An end node held on the bed (an anchor) never sinks into it, so the spring gives
-    # it no support; where the adjacent node rests on the bed, the line's first half
-    # segment lies on the seabed and the bed carries its wet weight, as it does for
-    # the continuous line (the anchor then feels only the grounded tension, as in the
-    # analytic catenary), instead of the end node hanging that weight on the anchor.
-    on_bed = depth_pen[jnp.array([0, -1])] > -1e-6 * env.depth
-    neighbour_rests = depth_pen[jnp.array([1, -2])] > 0
-    share = jnp.maximum(lt.wet_weight(env.rho, env.g), 0.0) * node_len[jnp.array([0, -1])]
-    support = jnp.where(on_bed & neighbour_rests, share, 0.0)
-    vertical = vertical.at[jnp.array([0, -1])].add(support)
+    vertical = vertical.at[jnp.array([0, -1])].add(_end_support(lt, env, depth_pen, node_len))
     force = jnp.zeros_like(r).at[:, 2].set(vertical)
     if bed.friction is not None:
         fr = bed.friction
@@ -135,7 +126,23 @@ def _seabed(lt, env, r, v, node_len):
     return force
 
 
-def _seabed_3d(lt, bed, r, v, node_len):
+def _end_support(lt, env, pen, node_len):
+    """Vertical support (2,) [N] of the bed under the end nodes.
+
+    An end node held on the bed (an anchor) never sinks into it, so the spring
+    gives it no support; where the adjacent node rests on the bed, the line's first
+    half segment lies on the seabed and the bed carries its wet weight, as it does
+    for the continuous line (the anchor then feels only the grounded tension, as in
+    the analytic catenary), instead of the end node hanging that weight on the
+    anchor. ``pen``: (n+1,) penetration of the nodes below the bed [m].
+    """
+    on_bed = pen[jnp.array([0, -1])] > -1e-6 * env.depth
+    neighbour_rests = pen[jnp.array([1, -2])] > 0
+    share = jnp.maximum(lt.wet_weight(env.rho, env.g), 0.0) * node_len[jnp.array([0, -1])]
+    return jnp.where(on_bed & neighbour_rests, share, 0.0)
+
+
+def _seabed_3d(lt, bed, env, r, v, node_len):
     """Contact with a bathymetry grid, along the local seabed normal (n+1, 3) [N]."""
     import jax
 
@@ -152,6 +159,11 @@ def _seabed_3d(lt, bed, r, v, node_len):
     normal = jnp.where(touching, bed.stiffness * pen * area, 0.0)
     magnitude = normal - jnp.where(touching, bed.damping * vn * area, 0.0)
     force = magnitude[:, None] * n
+    # the bed carries the normal component of the grounded end's weight share; its
+    # component along the slope stays on the end, as on an inclined catenary
+    ends = jnp.array([0, -1])
+    support = _end_support(lt, env, zb - r[:, 2], node_len) * n[ends, 2]
+    force = force.at[ends].add(support[:, None] * n[ends])
     if bed.friction is not None:
         fr = bed.friction
         ut = v - vn[:, None] * n
