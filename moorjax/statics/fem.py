@@ -71,13 +71,10 @@ def _catenary_guess(line: Line, env, t):
     ra, rb = line.end_a.position(t), line.end_b.position(t)
     w = lt.wet_weight(env.rho, env.g)
     ea = lt.axial.nominal_ea()
-    if env.seabed is None:
-        sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=False)
-    else:
-        # the analytic touchdown model needs the lower end on the seabed; a line whose
-        # ends are both above it starts from the free catenary, lifted onto the bed
-        lower_on_bed = jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
-        sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=lower_on_bed)
+    # the analytic touchdown model needs the lower end on the seabed; a line whose
+    # ends are both above it starts from the free catenary, lifted onto the bed
+    touchdown = env.seabed is not None and jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
+    sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=touchdown)
     s = line.segment_length * jnp.arange(1, line.n_segments)
     nodes = catenary_nodes(sol, ra, rb, s)
     ok = sol.converged & jnp.all(jnp.isfinite(nodes))
@@ -222,15 +219,19 @@ def _check_geometry(line, env, t):
         )
 
 
+#: Default tolerances of the static solve (see :func:`solve_line_statics`).
+RTOL, ATOL, MAX_STEPS = 1e-10, 1e-8, 500
+
+
 def solve_line_statics(
     line: Line,
     env,
     t=0.0,
     init: LineState | None = None,
     *,
-    rtol: float = 1e-10,
-    atol: float = 1e-8,
-    max_steps: int = 500,
+    rtol: float = RTOL,
+    atol: float = ATOL,
+    max_steps: int = MAX_STEPS,
     throw: bool = True,
 ) -> LineStatics:
     """Static equilibrium of one line with its ends where they are at time t.

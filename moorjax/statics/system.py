@@ -23,7 +23,7 @@ import numpy as np
 from jaxtyping import Array
 
 from ..body.coupling import attach, mooring_wrenches
-from .fem import LineStatics, _check_geometry, _solve_core
+from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _check_geometry, _solve_core
 
 
 class SystemStatics(eqx.Module):
@@ -61,7 +61,7 @@ def _line_statics_at(scene, poses, t, inits=None):
     # no end-below-the-bed check here: a free point resting on the seabed sinks to
     # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
     # a failed line solve is reported by ``converged``
-    return tuple(_solve_core(ln, scene.env, jnp.asarray(t, dtype=float), i, 1e-10, 1e-8, 500)
+    return tuple(_solve_core(ln, scene.env, jnp.asarray(t, dtype=float), i, RTOL, ATOL, MAX_STEPS)
                  for ln, i in zip(lines, inits))
 
 
@@ -159,11 +159,8 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         size = np.max(np.abs(g_np))
         for _ in range(6):
             trial = poses + jnp.asarray(step)
-            try:
-                new = _line_statics_at(scene, trial, t, inits)
-                ok = all(bool(x.converged) for x in new)
-            except ValueError:  # the trial put a line end under the bed or out of reach
-                ok = False
+            new = _line_statics_at(scene, trial, t, inits)
+            ok = all(bool(x.converged) for x in new)
             if ok:
                 ends = [(x.force_a, x.force_b) for x in new]
                 w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(trial), ends))
