@@ -2,9 +2,10 @@
 
 On only when stderr is a terminal and ``--quiet`` is not given (so logs and
 pipes stay clean). :class:`Progress` prints phase lines and a one-line bar;
-:meth:`Progress.meter` turns diffrax's text progress meter (which
-``simulate(progress=True)`` prints on stdout as ``12.00%`` lines) into the bar
-with the simulated time.
+:meth:`Progress.meter` turns the run's progress lines (which
+``simulate(progress=True)`` prints on stdout as ``12.00% 1234 56``: progress,
+steps, rejected steps; see :mod:`moorjax.dynamics.meter`) into the bar with the
+simulated time and the step counts.
 """
 
 from __future__ import annotations
@@ -79,14 +80,16 @@ class _MeterSink:
         self.buf += text
         while "\n" in self.buf:
             line, self.buf = self.buf.split("\n", 1)
-            line = line.strip()
-            if line.endswith("%"):
+            fields = line.split()
+            if fields and fields[0].endswith("%"):
                 try:
-                    frac = float(line[:-1]) / 100.0
+                    frac = float(fields[0][:-1]) / 100.0
+                    counts = [int(x) for x in fields[1:3]]
                 except ValueError:
                     continue
+                steps = (f", {counts[0]} steps ({counts[1]} rejected)" if len(counts) == 2 else "")
                 self.p.bar(frac, f"t = {self.t0 + frac * self.duration:.4g} / "
-                                 f"{self.t0 + self.duration:.4g} s simulated, "
+                                 f"{self.t0 + self.duration:.4g} s simulated{steps}, "
                                  f"{self.p.elapsed():.0f} s wall")
             elif line:
                 print(line, file=sys.__stdout__)
