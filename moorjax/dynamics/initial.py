@@ -95,8 +95,36 @@ def _states(sts):
     return tuple(s.state() for s in sts)
 
 
+def _stop_gradient(tree):
+    diff, static = eqx.partition(tree, eqx.is_inexact_array)
+    return eqx.combine(jax.lax.stop_gradient(diff), static)
+
+
 @eqx.filter_jit
-def _body_equilibrium(scene, t, loads, tol, max_iterations):
+def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
+    """The Newton iteration on constants (``lax`` loops are not reverse-
+    differentiable); the poses' derivatives come from the implicit function
+    theorem at the solution (see the end)."""
+    poses, inits, converged = _body_newton(_stop_gradient(scene_d), jax.lax.stop_gradient(t),
+                                           loads, tol, max_iterations)
+    # dη/dθ = −J⁻¹ ∂G/∂θ at the solution G(η, θ) = 0: a Newton step whose value
+    # is exactly zero but whose derivative is that
+    nb = len(scene_d.bodies)
+
+    def imbalance(p, scene):
+        return (body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits)).ravel()
+
+    jac = jax.jacfwd(imbalance)(poses, _stop_gradient(scene_d)).reshape(6 * nb, 6 * nb)
+    delta = -jnp.linalg.solve(jac, imbalance(poses, scene_d)).reshape(nb, 6)
+    tangent = delta - jax.lax.stop_gradient(delta)
+    poses = poses + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
+    st = _line_statics_at(scene_d, poses, t, inits)
+    lines_ok = jnp.stack([s.converged for s in st])
+    state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
+    return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
+
+
+def _body_newton(scene, t, loads, tol, max_iterations):
     nb = len(scene.bodies)
     n_dof = 6 * nb
 
@@ -158,10 +186,7 @@ def _body_equilibrium(scene, t, loads, tol, max_iterations):
     c0 = (0, poses0, inits0, jnp.asarray(False), jnp.asarray(False))
     _, poses, inits, _, converged = lax.while_loop(
         lambda c: (c[0] < max_iterations) & ~c[3], iteration, c0)
-    st = _line_statics_at(scene, poses, t, inits)
-    lines_ok = jnp.stack([s.converged for s in st])
-    state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene.bodies, poses))
-    return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
+    return poses, inits, converged
 
 
 def not_converged_message(scene, eq: Equilibrium) -> str:
