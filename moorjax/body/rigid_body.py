@@ -17,9 +17,8 @@ The memory integral is replaced by a fitted state-space model
 F_rad = −C ξ. At η = 0 weight and buoyancy are assumed to balance (give
 ``static_force`` otherwise).
 
-Solver state of a body: one 1-D array ``[η (6), η̇ (6), ξ (m)]``. (Line states
-are (n, 6) arrays; the Newton solve and the error norm tell bodies from lines by
-this shape.)
+Solver state of a body: one 1-D array ``[η (6), η̇ (6), ξ (m)]`` (see
+:class:`~moorjax.body.base.AbstractBody`, the interface this class implements).
 
 Optional structure (``radiation``, ``damping``, ``loads``) is never traced when
 absent.
@@ -34,6 +33,8 @@ import numpy as np
 from jaxtyping import Array
 
 from .._checks import check_finite, check_positive
+from .base import AbstractBody
+from .waves import WaveLoads
 
 DOF_NAMES = ("surge", "sway", "heave", "roll", "pitch", "yaw")
 
@@ -66,7 +67,7 @@ def _matrix(value, name, unit, symmetric=False):
     return m
 
 
-class RigidBody(eqx.Module):
+class RigidBody(AbstractBody):
     """A floating body (all matrices about its centre of gravity, global axes).
 
     Args:
@@ -143,15 +144,10 @@ class RigidBody(eqx.Module):
     def n_radiation(self) -> int:
         return 0 if self.radiation is None else int(self.radiation.A.shape[0])
 
-    def rest_state(self, pose=None) -> Array:
-        """Solver state at rest at ``pose`` (6,) (default η = 0)."""
-        pose = jnp.zeros(6) if pose is None else jnp.asarray(pose, dtype=float).reshape(6)
-        return jnp.concatenate([pose, jnp.zeros(6 + self.n_radiation)])
-
-    @staticmethod
-    def split(z):
-        """Solver state → (η, η̇, ξ)."""
-        return z[:6], z[6:12], z[12:]
+    @property
+    def n_internal(self) -> int:
+        """The radiation states ξ."""
+        return self.n_radiation
 
     # -- kinematics ---------------------------------------------------------
     def point_position(self, pose, local) -> Array:
@@ -188,8 +184,9 @@ class RigidBody(eqx.Module):
             f = f + ld.force(t)
         return f
 
-    def rate(self, t, z, mooring) -> Array:
-        """dz/dt of the solver state given the mooring wrench (6,) on the body."""
+    def rate(self, t, z, mooring, env=None) -> Array:
+        """dz/dt of the solver state given the mooring wrench (6,) on the body
+        (``env`` is not needed: the body's matrices hold the water's properties)."""
         pose, vel, xi = self.split(z)
         total = self.mass_matrix + self.added_mass
         acc = jnp.linalg.solve(total, self.external_force(t, pose, vel, xi) + mooring)
@@ -198,7 +195,27 @@ class RigidBody(eqx.Module):
             parts.append(self.radiation.rate(xi, vel))
         return jnp.concatenate(parts)
 
+    def mean_load(self, pose, t=0.0, env=None, *, loads: bool = True) -> Array:
+        """Static load at ``pose``: −Cη, ``static_force`` and (with ``loads``) each
+        external load's mean: a wave load's mean slow drift (its first-order
+        force averages to zero), any other load's force at time ``t``."""
+        f = -self.hydrostatic @ pose
+        if self.static_force is not None:
+            f = f + self.static_force
+        if loads:
+            for ld in self.loads:
+                f = f + mean_load_of(ld, t)
+        return f
+
     def energy(self, z) -> Array:
         """Kinetic (with A∞) plus hydrostatic energy ½η̇ᵀ(M+A∞)η̇ + ½ηᵀCη [J]."""
         pose, vel, _ = self.split(z)
         return 0.5 * vel @ (self.mass_matrix + self.added_mass) @ vel + 0.5 * pose @ self.hydrostatic @ pose
+
+
+def mean_load_of(load, t) -> Array:
+    """The mean (6,) [N, N·m] of one external load: a :class:`WaveLoads`' mean
+    drift, else the load's force at time ``t`` (steady loads)."""
+    if isinstance(load, WaveLoads):
+        return load.mean_drift()
+    return load.force(t)

@@ -1,8 +1,10 @@
 """The scene's equations of motion as a first-order ODE on a pytree.
 
 Solver state: a tuple with one (n_i − 1, 6) array per line, the free nodes'
-[position, velocity] side by side, followed by one 1-D array per floating body
-(its pose, velocity and radiation states; see :mod:`moorjax.body`). This node-major layout keeps each line's
+[position, velocity] side by side, followed by one 1-D array per body of
+``scene.bodies`` (its pose, velocity and internal states; see
+:class:`moorjax.body.base.AbstractBody`): the first ``len(scene.lines)`` entries
+are the lines'. This node-major layout keeps each line's
 Jacobian block-tridiagonal (6×6 blocks), which the block-tridiagonal Newton solve
 exploits; a system of several lines stacks into one larger band.
 
@@ -30,9 +32,11 @@ def pack(states) -> tuple:
                  for s in states)
 
 
-def unpack(y) -> tuple:
-    """Solver state → :class:`LineState` per line (body states stay 1-D arrays)."""
-    return tuple(LineState(r=q[..., :3], v=q[..., 3:]) if jnp.ndim(q) >= 2 else q for q in y)
+def unpack(y, n_lines: int) -> tuple:
+    """Solver state → a :class:`LineState` for each of the ``n_lines`` lines, then
+    the body states (1-D arrays) as they are."""
+    y = tuple(y)
+    return tuple(LineState(r=q[..., :3], v=q[..., 3:]) for q in y[:n_lines]) + y[n_lines:]
 
 
 def _body_kinematics(y, scene):
@@ -79,7 +83,7 @@ def vector_field(t, y, scene):
 
     ends = [_end_forces(line, q, scene.env, t) for line, q in zip(lines, y_lines)]
     wrenches = mooring_wrenches(scene.lines, scene.bodies, poses, ends)
-    rates = tuple(body.rate(t, z, w) for body, z, w in
+    rates = tuple(body.rate(t, z, w, scene.env) for body, z, w in
                   zip(scene.bodies, y[len(scene.lines):], wrenches))
     return out + rates
 

@@ -1,9 +1,10 @@
 """Ensembles: many scenes of one structure as one vmapped, compiled computation.
 
 ``simulate_ensemble`` stacks the members (see :mod:`moorjax.ensemble.batch`),
-finds each member's static equilibrium (vmapped), and integrates all of them
-with one ``vmap`` of the same pure function :func:`moorjax.dynamics.simulate`
-runs. Results come back as a :class:`~moorjax.dynamics.SimulationResult` whose
+finds each member's static equilibrium (one ``vmap`` of
+:func:`moorjax.dynamics.equilibrium_state`, bodies included), and integrates all
+of them with one ``vmap`` of :func:`moorjax.dynamics.integrate`, the function
+:func:`moorjax.dynamics.simulate` runs. Results come back as a :class:`~moorjax.dynamics.SimulationResult` whose
 arrays have a leading member axis.
 
 Failure isolation: every member has its own step size, Newton iterations and
@@ -30,62 +31,63 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from ..dynamics.simulate import SimulationResult, _solve, plan
+from ..dynamics.initial import check_geometry, equilibrium_state
+from ..dynamics.integrate import SUCCESS_CODE, SimulationResult, integrate, result_codes, result_names
+from ..dynamics.settings import plan
 from ..dynamics.vector_field import pack
-from ..statics.fem import _check_geometry, solve_line_statics
 from . import batch as _batch
 
 #: number of times the batched integrator has been traced (compiled) so far
 TRACES = {"ensemble": 0, "statics": 0}
 
 STATUS_OK = "ok"
-# diffrax result codes by value -> short name (e.g. "dt_min_reached")
-_RESULT_NAMES = {int(item._value): name for name, item in diffrax.RESULTS._name_to_item.items()}
 
 
-def _traced_solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, meter):
+def _traced_integrate(scene, y0, settings):
     TRACES["ensemble"] += 1  # runs at trace time only
-    return _solve(scene, y0, ts, t0, solver, controller, dt0, max_steps, with_nodes, meter)
+    return integrate(scene, y0, settings)
 
 
-_AXES = (0, 0) + (None,) * 8
-_batched_solve = eqx.filter_jit(eqx.filter_vmap(_traced_solve, in_axes=_AXES))
+_batched_integrate = eqx.filter_jit(eqx.filter_vmap(_traced_integrate, in_axes=(0, 0, None)))
 
 
-def _statics_states(scene, t0):
+def _traced_equilibrium(scene, t0):
     TRACES["statics"] += 1
-    return tuple(
-        solve_line_statics(line, scene.env, t0, throw=False).state() for line in scene.lines
-    )
+    eq = equilibrium_state(scene, t0)
+    return eq.state, eq.lines_converged, eq.converged
 
 
-def _statics_converged(scene, t0):
-    return jnp.stack(
-        [solve_line_statics(line, scene.env, t0, throw=False).converged for line in scene.lines]
-    )
-
-
-_batched_statics = eqx.filter_jit(
-    eqx.filter_vmap(lambda s, t0: (_statics_states(s, t0), _statics_converged(s, t0)),
-                    in_axes=(0, None))
-)
+_batched_equilibrium = eqx.filter_jit(eqx.filter_vmap(_traced_equilibrium, in_axes=(0, None)))
 
 
 def equilibrium(scenes, t0: float = 0.0):
-    """Static equilibrium of every member (vmapped): (stacked line states, converged).
+    """Static equilibrium of every member (vmapped): (stacked initial states, converged).
 
-    ``converged`` is (members, lines) bool; geometry errors (an end below the
-    seabed, a line too short for its ends) are raised for the first offending
-    member before anything runs.
+    The states are ``simulate``'s ``init`` (line states, then each body at rest
+    at its pose), stacked; ``converged`` is (members, lines) bool, each line's
+    entry also False when the member's bodies did not reach their balance.
+    Geometry errors (an end below the seabed, a line too short for its ends)
+    are raised for the first offending member of a list before anything runs.
     """
-    return _batched_statics(scenes, float(t0))
+    if isinstance(scenes, (list, tuple)):
+        _check_members(scenes, t0)
+        scenes = _batch.stack(scenes, name="scene")
+    state, lines_ok, ok = _batched_equilibrium(scenes, float(t0))
+    return state, lines_ok & ok[:, None]
+
+
+def _check_members(scenes, t0):
+    for i, s in enumerate(scenes):
+        try:
+            check_geometry(s, t0)
+        except ValueError as exc:
+            raise ValueError(f"ensemble member {i}: {exc}") from None
 
 
 def _shard(tree, devices):
@@ -107,12 +109,13 @@ def _pad(tree, n_total):
 
 def status(res: SimulationResult) -> np.ndarray:
     """Per-member outcome: ``"ok"`` or the reason (diffrax message or non-finite output)."""
-    codes = np.atleast_1d(np.asarray(res.result._value))
+    codes = result_codes(res.result)
+    names = result_names()
     finite = np.all(np.isfinite(np.asarray(res.tension_b)).reshape(codes.shape[0], -1), axis=1)
     out = []
     for code, fin in zip(codes, finite):
-        if code != diffrax.RESULTS.successful._value:
-            out.append(_RESULT_NAMES.get(int(code), f"diffrax result {int(code)}"))
+        if code != SUCCESS_CODE:
+            out.append(names.get(int(code), f"diffrax result {int(code)}"))
         elif not fin:
             out.append("non-finite output")
         else:
@@ -138,9 +141,10 @@ def simulate_ensemble(
         duration, settings: as :func:`moorjax.dynamics.simulate` (``solver``,
             ``rtol``, ``atol``, ``atol_velocity``, ``dt``, ``dt_out``, ``ts``,
             ``save_nodes``, ...; ``throw`` and ``progress`` are not available).
-        init: stacked tuple of :class:`LineState` (default: each member's static
-            equilibrium at ``t0``, vmapped; a member whose statics fails is
-            warned about and reported failed, the others run).
+        init: stacked tuple of :class:`LineState` and body states (default:
+            each member's static equilibrium at ``t0``, bodies included, vmapped
+            (:func:`equilibrium`); a member whose statics fails is warned about
+            and reported failed, the others run).
         devices: ``"all"`` (default) shards members over all local devices when
             there are several; a list of devices; or ``None`` for the default
             device only.
@@ -153,12 +157,7 @@ def simulate_ensemble(
         if bad in settings:
             raise ValueError(f"simulate_ensemble does not take {bad!r}; inspect status(result)")
     if isinstance(scenes, (list, tuple)):
-        for i, s in enumerate(scenes):
-            for line in s.lines:
-                try:
-                    _check_geometry(line, s.env, settings.get("t0", 0.0))
-                except ValueError as exc:
-                    raise ValueError(f"ensemble member {i}: {exc}") from None
+        _check_members(scenes, settings.get("t0", 0.0))
         scenes = _batch.stack(scenes, name="scene")
     n = _batch.size(scenes)
     p = plan(duration, scene=_batch.member(scenes, 0), **settings)
@@ -185,10 +184,7 @@ def simulate_ensemble(
         n_run = -(-n // len(devices)) * len(devices)
         scenes, y0 = _pad(scenes, n_run), _pad(y0, n_run)
         scenes, y0 = _shard(scenes, devices), _shard(y0, devices)
-    res = _batched_solve(
-        scenes, y0, p.ts, p.t0, p.solver, p.controller, p.dt0, p.max_steps, p.save_nodes,
-        diffrax.NoProgressMeter(),
-    )
+    res = _batched_integrate(scenes, y0, p)
     if n_run != n:
         res = jax.tree_util.tree_map(
             lambda x: x[:n] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == n_run else x,

@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from ..dynamics.integrate import first_bad_time
 from ..model.parameters import PARAMETERS, _split, get_parameter
 from .covariance import gauss_newton_covariance
 from .experiment import Experiment
@@ -126,11 +127,6 @@ class _Evaluation:
     problem: str | None
 
 
-def _first_bad_time(exp, model):
-    bad = ~np.all(np.isfinite(np.asarray(model)), axis=-1)
-    return float(np.asarray(exp.ts)[np.argmax(bad)]) if bad.any() else None
-
-
 class _Objective:
     """Loss and gradient in u, evaluated experiment by experiment (compiled core)."""
 
@@ -164,7 +160,7 @@ class _Objective:
                    if np.isfinite(v) else None)
             if g_e is None or not np.all(np.isfinite(g_e)):
                 if problem is None:
-                    t_bad = None if model is None else _first_bad_time(exp, model)
+                    t_bad = None if model is None else first_bad_time(exp.ts, model)
                     what = ("the static equilibrium or the time integration failed"
                             if not bool(ok) else "the loss or its gradient is not finite")
                     when = f" (tensions not finite from t = {t_bad:g} s)" if t_bad is not None else ""

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..model.parameters import set_parameter
 from .experiment import Experiment
-from .response import Simulation, banded, simulation, structured_implicit_gradients, tension_histories
+from ..dynamics.adjoint import banded, structured_implicit_gradients
+from .response import Simulation, simulation, tension_histories
 
 
 def _select(h, channels):

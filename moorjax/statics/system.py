@@ -1,9 +1,10 @@
 """Static equilibrium of a mooring system with floating bodies, and its stiffness.
 
 The bodies' equilibrium poses η solve ``F_body(η) + F_moor(η) = 0`` per body,
-where F_body holds the hydrostatic restoring force −Cη, a constant
-``static_force`` and the mean of each external load (a load's ``mean_force()``
-where it has one, e.g. the mean wave drift, otherwise its ``force(t)``), and
+where F_body is each body's mean load (its
+:meth:`~moorjax.body.base.AbstractBody.mean_load`: the hydrostatic restoring force
+−Cη, a constant ``static_force`` and the mean of each external load: a wave
+load's mean drift, a steady load's force), and
 F_moor is the wrench of the lines, each in its own static equilibrium with its
 fairleads where the poses put them. The Newton iteration on the 6·n_bodies
 unknowns takes its Jacobian by forward-mode AD through the lines' static solves
@@ -78,26 +79,11 @@ def mooring_wrench(scene, poses, t=0.0, inits=None) -> Array:
     return jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses), ends))
 
 
-def _mean_load(load, t):
-    for name in ("mean_force", "mean_drift"):  # a wave load's mean is its drift
-        mean = getattr(load, name, None)
-        if callable(mean):
-            return mean()
-    return load.force(t)
-
-
 def body_forces(scene, poses, t=0.0, loads=True) -> Array:
-    """(n_bodies, 6) static non-mooring forces at poses: −Cη + static + mean loads."""
-    out = []
-    for body, pose in zip(scene.bodies, poses):
-        f = -body.hydrostatic @ pose
-        if body.static_force is not None:
-            f = f + body.static_force
-        if loads:
-            for ld in body.loads:
-                f = f + _mean_load(ld, t)
-        out.append(f)
-    return jnp.stack(out)
+    """(n_bodies, 6) static non-mooring forces at poses: each body's
+    :meth:`~moorjax.body.base.AbstractBody.mean_load` (−Cη + static + mean loads)."""
+    return jnp.stack([body.mean_load(pose, t, scene.env, loads=loads)
+                      for body, pose in zip(scene.bodies, poses)])
 
 
 @eqx.filter_jit

@@ -1,0 +1,211 @@
+"""The initial state of a run: the static equilibrium at t0, for lines and bodies.
+
+:func:`equilibrium_state` is the one place a run's default start is built, for
+``simulate``, ensembles and identification alike. It is a pure function of the
+scene's arrays (jittable, vmappable, differentiable through the statics'
+implicit-function gradients):
+
+- without bodies, each line's static solve with its ends where they are at t0;
+- with bodies (rigid bodies, free connection points), the poses η that balance
+  each body's mean load (:meth:`~moorjax.body.base.AbstractBody.mean_load`) and
+  the lines' static wrench, by the damped, backtracking Newton iteration of
+  :func:`moorjax.statics.solve_system_statics` written with ``lax`` loops (so
+  an ensemble of body scenes solves its statics in one vmapped call), then each
+  body at rest at its pose.
+
+It never raises on non-convergence: ``converged`` says whether it did (and the
+state is where the iteration stopped).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+from jaxtyping import Array
+
+from ..body.coupling import attach, mooring_wrenches
+from ..statics import fem
+from ..statics.fem import solve_line_statics
+from ..statics.system import body_forces, mooring_wrench
+
+
+class Equilibrium(eqx.Module):
+    """A static equilibrium as a start.
+
+    Attributes:
+        state: the line states (:class:`~moorjax.model.line.LineState`), then each
+            body's 1-D state at rest at its pose — ``simulate``'s ``init``.
+        lines_converged: (n_lines,) whether each line's static solve converged.
+        converged: whether every line's solve and (with bodies) the bodies'
+            force balance converged.
+        poses: (n_bodies, 6) body poses η [m, rad] (``None`` without bodies).
+    """
+
+    state: tuple
+    lines_converged: Array
+    converged: Array
+    poses: Array | None = None
+
+
+def check_geometry(scene, t0=0.0):
+    """Refuse impossible geometry before anything runs: ``ValueError`` naming the
+    line whose end is below the seabed or that cannot reach its ends (bodies at
+    η = 0). Skipped for traced values."""
+    lines = scene.lines
+    if scene.bodies:
+        zero = [jnp.zeros(6)] * len(scene.bodies)
+        lines = attach(scene.lines, scene.bodies, zero, zero)
+    for line in lines:
+        fem._check_geometry(line, scene.env, t0)
+
+
+def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
+                      max_iterations: int = 50) -> Equilibrium:
+    """The static equilibrium of ``scene`` at ``t0`` as a start (see the module notes).
+
+    Args:
+        loads: with bodies, include their mean external loads (mean wind,
+            current, wave drift); else hydrostatics and weights only.
+        tol, max_iterations: the bodies' Newton iteration (relative force
+            tolerance on the scale of the lines' tensions; iteration limit).
+    """
+    if not scene.bodies:
+        sts = [solve_line_statics(line, scene.env, t0, throw=False) for line in scene.lines]
+        ok = jnp.stack([st.converged for st in sts])
+        return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok))
+    check_geometry(scene, t0)
+    return _body_equilibrium(scene, jnp.asarray(t0, dtype=float), bool(loads), float(tol),
+                             int(max_iterations))
+
+
+def _line_statics_at(scene, poses, t, inits):
+    """Each line's static solve with its fairleads where ``poses`` put them."""
+    zero = [jnp.zeros(6)] * len(scene.bodies)
+    lines = attach(scene.lines, scene.bodies, list(poses), zero)
+    # traced here, so no end-below-the-bed check: a free point resting on the seabed
+    # sinks to its contact penetration, carried by its lines' end-node contact
+    return tuple(solve_line_statics(ln, scene.env, t, init, throw=False)
+                 for ln, init in zip(lines, inits))
+
+
+def _states(sts):
+    return tuple(s.state() for s in sts)
+
+
+def _stop_gradient(tree):
+    diff, static = eqx.partition(tree, eqx.is_inexact_array)
+    return eqx.combine(jax.lax.stop_gradient(diff), static)
+
+
+@eqx.filter_jit
+def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
+    """The Newton iteration on constants (``lax`` loops are not reverse-
+    differentiable); the poses' derivatives come from the implicit function
+    theorem at the solution (see the end)."""
+    poses, inits, converged = _body_newton(_stop_gradient(scene_d), jax.lax.stop_gradient(t),
+                                           loads, tol, max_iterations)
+    # dη/dθ = −J⁻¹ ∂G/∂θ at the solution G(η, θ) = 0: a Newton step whose value
+    # is exactly zero but whose derivative is that
+    nb = len(scene_d.bodies)
+
+    def imbalance(p, scene):
+        return (body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits)).ravel()
+
+    jac = jax.jacfwd(imbalance)(poses, _stop_gradient(scene_d)).reshape(6 * nb, 6 * nb)
+    delta = -jnp.linalg.solve(jac, imbalance(poses, scene_d)).reshape(nb, 6)
+    tangent = delta - jax.lax.stop_gradient(delta)
+    poses = poses + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
+    st = _line_statics_at(scene_d, poses, t, inits)
+    lines_ok = jnp.stack([s.converged for s in st])
+    state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
+    return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
+
+
+def _body_newton(scene, t, loads, tol, max_iterations):
+    nb = len(scene.bodies)
+    n_dof = 6 * nb
+
+    def imbalance(poses, inits):
+        return body_forces(scene, poses, t, loads) + mooring_wrench(scene, poses, t, inits)
+
+    def newton_parts(poses, inits):
+        g, jvp_fn = jax.linearize(lambda p: imbalance(p, inits), poses)
+        jac = jax.vmap(jvp_fn)(jnp.eye(n_dof).reshape((n_dof,) + poses.shape))
+        return g, jac.reshape(n_dof, n_dof).T
+
+    poses0 = jnp.zeros((nb, 6))
+    inits0 = _states(_line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
+    st0 = _line_statics_at(scene, poses0, t, inits0)
+    tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st0]))
+    scale = jnp.maximum(jnp.maximum(tens, jnp.max(jnp.abs(imbalance(poses0, inits0)))), 1.0)
+
+    def newton_step(poses, inits, g, jac, size):
+        """A damped Newton step with backtracking: (poses, inits, admissible)."""
+        step = jnp.linalg.solve(jac, -g.ravel()).reshape(nb, 6)
+        # damp large rotations and translations (the line statics must stay reachable)
+        big = jnp.maximum(jnp.maximum(jnp.max(jnp.abs(step[:, :3])) / 5.0,
+                                      jnp.max(jnp.abs(step[:, 3:])) / 0.05), 1.0)
+
+        # backtracking: seabed contact makes the imbalance kinked, so a full
+        # Newton step can overshoot and cycle
+        def trial(c):
+            k, step, _, _, _, _ = c
+            poses_t = poses + step
+            new = _line_statics_at(scene, poses_t, t, inits)
+            ok = jnp.all(jnp.stack([s.converged for s in new]))
+            ends = [(s.force_a, s.force_b) for s in new]
+            w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses_t), ends))
+            g_t = body_forces(scene, poses_t, t, loads) + w
+            found = ok & (jnp.max(jnp.abs(g_t)) < size)
+            return k + 1, jnp.where(found, step, 0.5 * step), poses_t, _states(new), ok, found
+
+        c0 = (0, step / big, poses, inits, jnp.asarray(False), jnp.asarray(False))
+        _, _, poses_t, new, ok, _ = lax.while_loop(lambda c: (c[0] < 6) & ~c[5], trial, c0)
+        return poses_t, new, ok
+
+    def iteration(c):
+        it, poses, inits, _, _ = c
+        g, jac = newton_parts(poses, inits)
+        finite = jnp.all(jnp.isfinite(g)) & jnp.all(jnp.isfinite(jac))
+        size = jnp.max(jnp.abs(g))
+        converged = finite & (size < tol * scale)
+        stop = ~finite | converged
+        safe_jac = jnp.where(finite, jac, jnp.eye(n_dof))
+        poses_t, new, ok = lax.cond(
+            stop, lambda: (poses, inits, jnp.asarray(False)),
+            lambda: newton_step(poses, inits, jnp.where(finite, g, 0.0), safe_jac, size))
+        take = ~stop & ok
+        poses = jnp.where(take, poses_t, poses)
+        inits = jax.tree_util.tree_map(lambda a, b: jnp.where(take, a, b), new, inits)
+        # stop at the last good poses when no trial step was admissible
+        return it + 1, poses, inits, stop | ~ok, converged
+
+    c0 = (0, poses0, inits0, jnp.asarray(False), jnp.asarray(False))
+    _, poses, inits, _, converged = lax.while_loop(
+        lambda c: (c[0] < max_iterations) & ~c[3], iteration, c0)
+    return poses, inits, converged
+
+
+def not_converged_message(scene, eq: Equilibrium) -> str:
+    """Why an equilibrium (concrete) is no start, naming the lines that failed."""
+    bad = [scene.lines[i].label for i, ok in enumerate(np.asarray(eq.lines_converged)) if not ok]
+    if bad:
+        return (f"the static solve of line(s) {', '.join(bad)} did not converge (Newton failed "
+                "or left a force imbalance); check the geometry (can the line reach its ends?), "
+                "or give `init`")
+    return ("the bodies' static equilibrium did not converge (force imbalance left after the "
+            "Newton iterations); check the bodies' loads and lines, or give `init`")
+
+
+def initial_state(scene, t0=0.0) -> tuple:
+    """The static equilibrium at t0 as ``simulate``'s ``init``: line states, then each
+    body at rest at its equilibrium pose (mean loads included). Raises
+    ``RuntimeError`` when it does not converge (concrete scenes)."""
+    eq = equilibrium_state(scene, t0)
+    if not isinstance(eq.converged, jax.core.Tracer) and not bool(eq.converged):
+        raise RuntimeError(f"static equilibrium at t0 = {float(t0):g} s: "
+                           + not_converged_message(scene, eq))
+    return eq.state

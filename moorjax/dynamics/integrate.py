@@ -1,0 +1,217 @@
+"""The time integration: the one call of ``diffrax.diffeqsolve``.
+
+:func:`integrate` is a pure function of the scene's arrays, the initial state
+and the :class:`~moorjax.dynamics.settings.Settings` (jit-, vmap- and
+grad-able); ``simulate``, ensembles (a ``vmap`` of it) and identification (its
+gradient) all run it. It never raises: the diffrax result code and the outputs
+say what happened; :func:`failure_cause` words a failure, :func:`result_names`
+names the codes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.experimental
+import numpy as np
+from jaxtyping import Array
+
+from .adjoint import diffrax_adjoint
+from .vector_field import end_outputs, unpack, vector_field
+
+
+class SimulationResult(eqx.Module):
+    """Outputs of :func:`~moorjax.dynamics.simulate` (leading axis: output times).
+
+    Attributes:
+        ts: (k,) output times [s] (by default t0, t0 + dt_out, …, t0 + duration).
+        tension_a, tension_b: (k, n_lines) end tensions [N] (magnitude of the force
+            the line exerts on its end A / B point).
+        force_a, force_b: (k, n_lines, 3) those forces [N].
+        positions, segment_tensions: per-line tuples of (k, n+1, 3) [m] and (k, n)
+            [N] when requested, else ``None``.
+        final_state: tuple of :class:`LineState` at the last time reached, then
+            each body's 1-D state (``None`` when not kept, see :func:`integrate`).
+        num_steps, num_accepted_steps, num_rejected_steps: solver statistics.
+        result: diffrax result code (0 = success); see :meth:`succeeded`.
+        num_newton_iterations: Newton iterations of all implicit stages (only
+            with ``simulate(..., count_newton=True)``, else ``None``).
+        num_evaluations: vector-field evaluations (with ``count_newton``).
+        body_pose, body_velocity: (k, n_bodies, 6) displacements η [m, rad] and
+            velocities η̇ of the scene's floating bodies (``None`` without bodies).
+    """
+
+    ts: Array
+    tension_a: Array
+    tension_b: Array
+    force_a: Array
+    force_b: Array
+    positions: Any
+    segment_tensions: Any
+    final_state: Any
+    num_steps: Array
+    num_accepted_steps: Array
+    num_rejected_steps: Array
+    result: Any
+    num_newton_iterations: Any = None
+    num_evaluations: Any = None
+    body_pose: Any = None
+    body_velocity: Any = None
+
+    def succeeded(self):
+        return self.result == diffrax.RESULTS.successful
+
+
+#: host-side count of vector-field evaluations (diagnostic runs only)
+EVALUATIONS = [0]
+
+
+def _bump():
+    EVALUATIONS[0] += 1
+
+
+def _counted_vector_field(t, y, scene):
+    """The vector field, counting its evaluations on the host (slow: a callback each)."""
+    jax.experimental.io_callback(_bump, None, ordered=False)
+    return vector_field(t, y, scene)
+
+
+def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = True
+              ) -> SimulationResult:
+    """Integrate ``scene`` from the solver state ``y0`` (see
+    :func:`~moorjax.dynamics.vector_field.pack`) with ``settings``.
+
+    Args:
+        count: count vector-field evaluations on the host (:data:`EVALUATIONS`).
+        keep_final: also return the state at the last time reached
+            (``final_state``); without it only the end outputs are saved, which
+            is all a gradient needs.
+
+    Returns a :class:`SimulationResult`; never raises on a failed solve (the
+    outputs after the failure are not finite: diffrax fills them with inf).
+    """
+    s = settings
+    with_nodes = s.save_nodes
+    term = diffrax.ODETerm(_counted_vector_field if count else vector_field)
+    if keep_final:
+        saveat = diffrax.SaveAt(
+            ts=s.ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)
+        )
+    else:
+        saveat = diffrax.SaveAt(ts=s.ts, fn=lambda t, y, args: end_outputs(t, y, args, with_nodes))
+    dt0 = None if isinstance(s.controller, diffrax.StepTo) else s.dt0
+    sol = diffrax.diffeqsolve(
+        term,
+        s.solver,
+        s.t0,
+        s.ts[-1],
+        dt0,
+        y0,
+        args=scene,
+        saveat=saveat,
+        stepsize_controller=s.controller,
+        max_steps=s.max_steps,
+        throw=False,
+        progress_meter=s.meter,
+        adjoint=diffrax_adjoint(s, y0),
+    )
+    if keep_final:
+        outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
+        cut = lambda a: a[:-1]  # noqa: E731
+        final = unpack(jax.tree_util.tree_map(lambda a: a[-1], ys), len(scene.lines))
+    else:
+        outs = sol.ys
+        cut = lambda a: a  # noqa: E731
+        final = None
+    return SimulationResult(
+        ts=s.ts,
+        tension_a=cut(outs["tension_a"]),
+        tension_b=cut(outs["tension_b"]),
+        force_a=cut(outs["force_a"]),
+        force_b=cut(outs["force_b"]),
+        positions=(tuple(cut(p) for p in outs["positions"]) if with_nodes else None),
+        segment_tensions=(tuple(cut(p) for p in outs["segment_tensions"]) if with_nodes else None),
+        final_state=final,
+        num_steps=sol.stats["num_steps"],
+        num_accepted_steps=sol.stats["num_accepted_steps"],
+        num_rejected_steps=sol.stats["num_rejected_steps"],
+        result=sol.result,
+        body_pose=cut(outs["body_pose"]) if "body_pose" in outs else None,
+        body_velocity=cut(outs["body_velocity"]) if "body_velocity" in outs else None,
+    )
+
+
+def is_implicit_solver(solver) -> bool:
+    return isinstance(solver, diffrax.AbstractImplicitSolver)
+
+
+# -- result codes and failures ----------------------------------------------
+
+#: diffrax's result codes by name (those of diffrax 0.7; absent ones are skipped)
+_NAMES = ("successful", "max_steps_reached", "singular", "breakdown", "stagnation", "conlim",
+          "nonfinite_input", "nonlinear_max_steps_reached", "nonlinear_divergence",
+          "nonfinite", "dt_min_reached", "event_occurred", "max_steps_rejected",
+          "internal_error")
+
+
+def result_codes(result) -> np.ndarray:
+    """The integer code(s) of a diffrax result (one per ensemble member)."""
+    return np.atleast_1d(np.asarray(result._value))
+
+
+def result_names() -> dict:
+    """diffrax result codes by value → short name (e.g. ``"dt_min_reached"``)."""
+    return {int(getattr(diffrax.RESULTS, n)._value): n for n in _NAMES
+            if hasattr(diffrax.RESULTS, n)}
+
+
+SUCCESS_CODE = int(diffrax.RESULTS.successful._value)
+
+
+def first_bad_time(ts, values):
+    """The first output time [s] at which some of ``values`` (k, …) is not finite
+    (``None`` if all are)."""
+    values = np.asarray(values)
+    bad = ~np.all(np.isfinite(values.reshape(values.shape[0], -1)), axis=-1)
+    return float(np.asarray(ts)[np.argmax(bad)]) if bad.any() else None
+
+
+def failure_cause(res: SimulationResult, max_steps: int, fixed: bool = False):
+    """``None`` if the run succeeded with finite outputs, else (time text, cause, code)."""
+    ok = bool(res.succeeded())
+    t_bad = first_bad_time(res.ts, res.tension_b)
+    if ok and t_bad is None:
+        return None
+    code = res.result
+    if code == diffrax.RESULTS.max_steps_reached:
+        cause = f"the step limit max_steps={max_steps} was reached (raise it, or loosen tolerances)"
+    elif code == diffrax.RESULTS.dt_min_reached:
+        cause = (
+            "the step size fell below its minimum (the state became non-finite, or a "
+            "snap load or slack line the method cannot resolve: check the inputs, try "
+            "tighter tolerances or more segments)"
+        )
+    elif fixed and code != diffrax.RESULTS.successful:
+        cause = (
+            "Newton did not converge at the fixed step dt (a snap load or slack line "
+            "within one step?): use adaptive steps (no dt) or a smaller dt"
+        )
+    elif code in (
+        diffrax.RESULTS.nonlinear_divergence,
+        diffrax.RESULTS.singular,
+        diffrax.RESULTS.nonlinear_max_steps_reached,
+    ):
+        cause = "Newton did not converge even at the smallest step (stiff snap or slack line?)"
+    else:
+        cause = (
+            "the state became non-finite or the step size collapsed (a snap load or "
+            "slack line the method cannot resolve: try an implicit solver, smaller "
+            "tolerances or more segments)"
+        )
+    where = (
+        f"at t ≈ {t_bad:.6g} s" if t_bad is not None else f"before t = {float(res.ts[-1]):.6g} s"
+    )
+    return where, cause, code

@@ -1,0 +1,234 @@
+"""The validated settings of a time integration (:class:`Settings`, built by :func:`plan`).
+
+One object carries everything the integrator needs besides the scene and the
+initial state: output times, start time, solver (with its Newton root finder),
+step-size controller, first step, step limit, whether node data are saved, the
+progress meter, and the adjoint (how derivatives pass through the solve, see
+:mod:`moorjax.dynamics.adjoint`) with its checkpoint count. ``simulate``,
+ensembles and identification all build theirs here, so every setting is checked
+in one place.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from .adjoint import ADJOINTS, banded_jacobian, check_adjoint
+from .solvers import StateNorm, is_implicit, make_solver
+
+
+class Settings(eqx.Module):
+    """Validated, scene-independent settings of an integration (see :func:`plan`).
+
+    Array fields (output times, t0, first step, tolerances inside the solver and
+    controller) may change without recompiling; the static ones may not.
+    """
+
+    ts: Array
+    t0: Array  # arrays, so other start times and first steps do not recompile
+    solver: Any
+    controller: Any
+    dt0: Array
+    max_steps: int = eqx.field(static=True)
+    save_nodes: bool = eqx.field(static=True)
+    meter: Any
+    name: str = eqx.field(static=True)
+    adjoint: str = eqx.field(static=True, default="checkpointed")
+    checkpoints: int = eqx.field(static=True, default=0)  # reverse mode (0: diffrax's schedule)
+
+    @property
+    def n_steps(self) -> int:
+        """The step limit."""
+        return self.max_steps
+
+    def with_adjoint(self, adjoint: str) -> "Settings":
+        """The same settings with another adjoint (``"checkpointed"`` or ``"forward"``)."""
+        check_adjoint(adjoint)
+        return dataclasses.replace(self, adjoint=adjoint)
+
+    def run(self, scene, y0):
+        """The pure integration: a :class:`~moorjax.dynamics.integrate.SimulationResult`
+        (no checks, no throw)."""
+        from .integrate import integrate
+
+        return integrate(scene, y0, self)
+
+
+#: the former name of :class:`Settings`
+Plan = Settings
+
+#: smallest adaptive step [s], relative to max(1 s, end time)
+_DT_MIN = 1e-9
+
+#: a retried step is this fraction of the failed one; steps grow back by at most
+#: ``1/RETRY`` per accepted step, up to ``dt`` (see ``retry_failed_steps``)
+RETRY = 0.25
+
+
+def plan(
+    duration=None,
+    *,
+    ts=None,
+    dt_out: float = 0.05,
+    t0: float = 0.0,
+    solver: str | Any = "kvaerno5",
+    rtol: float = 1e-5,
+    atol: float = 1e-4,
+    atol_velocity: float | None = None,
+    dt: float | None = None,
+    dt0: float | None = None,
+    max_steps: int = 1_000_000,
+    save_nodes: bool = False,
+    dense_newton: bool = False,
+    linear_solver: str = "reduced",
+    progress: bool = False,
+    scene=None,
+    adjoint: str = "checkpointed",
+    checkpoints: int = 0,
+    retry_failed_steps: bool = False,
+) -> Settings:
+    """Check the settings of :func:`~moorjax.dynamics.simulate` (same arguments)
+    and build the solver.
+
+    Raises ``ValueError`` naming the offending setting. With ``scene``, a
+    structured linear solver is replaced by the dense one when some line's
+    element does not have a block-tridiagonal Jacobian (consistent mass), and
+    the run is checked against the time spans of the scene's motions.
+
+    Further (for differentiable runs, see :mod:`moorjax.identify`):
+        adjoint: ``"checkpointed"`` (reverse mode) or ``"forward"``.
+        checkpoints: reverse-mode checkpoints (0: diffrax's O(√steps) schedule);
+            used only when they fit in :data:`~moorjax.dynamics.adjoint.CHECKPOINT_BYTES`.
+        retry_failed_steps: with ``dt``, retry a step whose implicit (Newton)
+            solve fails with a quarter of it (steps grow back to ``dt``): a PID
+            controller whose error control is off. Where no step fails the
+            steps are exactly ``dt``.
+    """
+    check_adjoint(adjoint)
+    if scene is not None and linear_solver in ("reduced", "block") and not banded_jacobian(scene):
+        linear_solver = "dense"
+    if ts is None:
+        if duration is None:
+            raise ValueError("give the simulated duration [s] or the output times ts")
+        duration = float(duration)
+        if not np.isfinite(duration) or duration <= 0:
+            raise ValueError(f"duration = {duration} s must be a positive finite number")
+        if not (np.isfinite(dt_out) and dt_out > 0):
+            raise ValueError(f"dt_out = {dt_out} s must be > 0")
+        ts = t0 + default_output_times(duration, dt_out)
+    ts = jnp.asarray(ts, dtype=float)
+    if ts.ndim != 1 or ts.shape[0] < 1:
+        raise ValueError("output times ts must be a non-empty 1-D array [s]")
+    if not isinstance(ts, jax.core.Tracer):
+        tsn = np.asarray(ts)
+        if not np.all(np.isfinite(tsn)) or np.any(np.diff(tsn) <= 0) or tsn[0] < t0:
+            raise ValueError(f"output times [s] must be finite, increasing and >= t0 = {t0}")
+        if tsn[-1] <= t0:
+            raise ValueError(f"the last output time {tsn[-1]} s must be after t0 = {t0} s")
+        if scene is not None:
+            check_time_span(scene, float(t0), float(tsn[-1]))
+    if atol_velocity is None:
+        atol_velocity = 100.0 * float(atol)
+    for name, tol, unit, hi in (
+        ("rtol", rtol, "", 0.1),
+        ("atol", atol, " m", 0.1),
+        ("atol_velocity", atol_velocity, " m/s", 10.0),
+    ):
+        if not (1e-14 <= float(tol) <= hi):
+            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
+    norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
+    rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
+
+    if isinstance(solver, str):
+        name = solver
+        fixed_implicit = dt is not None and is_implicit(solver)
+        solver = make_solver(
+            solver,
+            newton_rtol=rtol_a if fixed_implicit else None,
+            newton_atol=atol_a if fixed_implicit else None,
+            norm=norm,
+            linear_solver=linear_solver,
+            dense_newton=dense_newton,
+        )
+    else:
+        name = type(solver).__name__
+    if dt is not None:
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt = {dt} s must be > 0")
+        step0 = dt
+        if retry_failed_steps:
+            controller = diffrax.PIDController(
+                # error control off (velocities on plan's default 100x looser
+                # scale): only steps whose Newton solve fails are retried
+                rtol=1.0, atol=1e9, norm=StateNorm(jnp.asarray(0.01)),
+                dtmax=float(dt), dtmin=float(dt) * RETRY**6, force_dtmin=False,
+                factormin=RETRY, factormax=1.0 / RETRY,
+            )
+        else:
+            controller = diffrax.ConstantStepSize()
+    else:
+        # dtmin: a member whose state turns non-finite stops at once (with
+        # RESULTS.dt_min_reached) instead of shrinking its step until max_steps.
+        t_end = float(np.max(np.abs(np.asarray(ts)))) if not isinstance(ts, jax.core.Tracer) else 1.0
+        controller = diffrax.PIDController(
+            rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4,
+            dtmin=jnp.asarray(_DT_MIN * max(1.0, t_end)), force_dtmin=False,
+        )
+        step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
+
+    meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
+    return Settings(
+        ts, jnp.asarray(float(t0)), solver, controller, jnp.asarray(float(step0)),
+        int(max_steps), bool(save_nodes), meter, name, adjoint, int(checkpoints),
+    )
+
+
+def default_output_times(duration, dt_out):
+    """0, dt_out, 2·dt_out, … [s] after the start, ending with ``duration`` itself
+    (exactly: the last sample is where the run ends)."""
+    k = int(np.floor(duration / dt_out * (1 + 1e-12)))
+    ts = dt_out * np.arange(k + 1)
+    if duration - ts[-1] > 1e-9 * duration:
+        return np.append(ts, duration)
+    ts[-1] = duration
+    return ts
+
+
+def check_time_span(scene, t0, t1):
+    """Refuse a run from ``t0`` to ``t1`` [s] that leaves the time span of one of
+    the scene's line ends (a tabulated motion): ``ValueError`` naming the line,
+    the end, both spans and the fix. Spans that are traced values are skipped."""
+    tol = 1e-9 * max(1.0, abs(t0), abs(t1))
+    for line in scene.lines:
+        for name, end in (("A", line.end_a), ("B", line.end_b)):
+            lo, hi = end.time_span()
+            if isinstance(lo, jax.core.Tracer) or isinstance(hi, jax.core.Tracer):
+                continue
+            lo, hi = float(lo), float(hi)
+            where = f"line {line.label} end {name}: its prescribed motion"
+            need = f"the motion must cover the whole run, t = {t0:.10g} to {t1:.10g} s"
+            if lo > t0 + tol:
+                raise ValueError(
+                    f"{where} starts at t = {lo:.10g} s, after the start of the run t0 = "
+                    f"{t0:.10g} s; {need}: give it from t0 on, or start the run at "
+                    f"t0 = {lo:.10g} s"
+                )
+            if hi < t1 - tol:
+                raise ValueError(
+                    f"{where} ends at t = {hi:.10g} s, before the end of the run at "
+                    f"{t1:.10g} s; {need}: extend it to at least {t1:.10g} s (to hold the "
+                    "point still, add rows at its last position with zero velocity) or "
+                    "shorten the run"
+                )
+
+
+__all__ = ["ADJOINTS", "Plan", "Settings", "banded_jacobian", "check_time_span",
+           "default_output_times", "plan"]

@@ -1,0 +1,121 @@
+"""The one integration core: diffrax only in moorjax.dynamics, its one internal
+patch pinned to the diffrax version, body weights computed at run time, and an
+initial state that vmaps over the parameters of a scene with a body."""
+
+from __future__ import annotations
+
+import inspect
+import pathlib
+import re
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import moorjax as mj
+from moorjax.body import ConnectionPoint
+from moorjax.dynamics import adjoint, equilibrium_state
+from moorjax.ensemble import equilibrium as ensemble_equilibrium
+from moorjax.statics import solve_line_statics
+
+ROOT = pathlib.Path(mj.__file__).parent
+
+
+def test_only_dynamics_imports_diffrax():
+    users = sorted(str(p.relative_to(ROOT)) for p in ROOT.rglob("*.py")
+                   if re.search(r"^\s*(import|from)\s+diffrax\b", p.read_text(), re.M))
+    assert users and all(u.startswith("dynamics/") for u in users), users
+
+
+def test_structured_gradient_patch_is_pinned_to_diffrax():
+    """The structured implicit-function solves replace ``optx`` in two diffrax
+    modules (diffrax has no option for it). A diffrax upgrade must fail here, so
+    that someone checks the patch (and the gradient tests) against it."""
+    assert diffrax.__version__ == adjoint.PATCHED_DIFFRAX
+    for name in adjoint.PATCHED_MODULES:
+        module = __import__(name, fromlist=["optx"])
+        src = inspect.getsource(module)
+        # the implicit stages call optimistix's root_find, without an adjoint
+        calls = re.findall(r"optx\.root_find\((.*?)\n\s*\)", src, re.S)
+        assert calls and all("adjoint" not in c for c in calls), name
+        assert hasattr(module, "optx")
+    with adjoint.structured_implicit_gradients():
+        for name in adjoint.PATCHED_MODULES:
+            assert isinstance(__import__(name, fromlist=["optx"]).optx,
+                              adjoint._StructuredOptimistix)
+        assert adjoint._STRUCTURED.get()
+    assert not adjoint._STRUCTURED.get()  # outside, root_find is optimistix's own
+
+
+# --------------------------------------------------------------------------- bodies
+
+LT = mj.LineType(0.08, 30.0, 2.0e8, drag=mj.MorisonDrag(1.2, 0.2))
+ENV = mj.Environment(200.0, seabed=None)
+A, B = np.array([-300.0, 0.0, -200.0]), np.array([0.0, 0.0, -20.0])
+N1, N2, L_SEG = 3, 2, 80.0
+NODE_MASS = float(LT.mass_per_length) * L_SEG
+
+
+def series(point):
+    l1 = mj.Line(LT, N1 * L_SEG, N1, mj.FixedEnd(A), mj.BodyEnd(0, [0, 0, 0]), label="1")
+    l2 = mj.Line(LT, N2 * L_SEG, N2, mj.BodyEnd(0, [0, 0, 0]), mj.FixedEnd(B), label="2")
+    return mj.Scene([l1, l2], ENV, bodies=[point])
+
+
+def test_point_weight_follows_its_mass_under_grad():
+    """d(acceleration)/d(mass) includes the weight's change: −g/(m + a) − F/(m + a)²."""
+    rho, g, vol, added = 1025.0, 9.80665, 0.5, 100.0
+    point = ConnectionPoint(800.0, [0, 0, -50.0], volume=vol, added_mass=added, rho=rho, g=g)
+    z = point.rest_state()
+
+    def heave_acc(m):
+        return eqx.tree_at(lambda p: p.mass, point, m).rate(0.0, z, jnp.zeros(6))[8]
+
+    m = 800.0
+    net = (rho * vol - m) * g
+    expected = -g / (m + added) - net / (m + added) ** 2
+    assert float(jax.grad(heave_acc)(m)) == pytest.approx(expected, rel=1e-12)
+    # the statics' mean load too, and the volume's buoyancy
+    load = lambda p: p.mean_load(jnp.zeros(6))[2]  # noqa: E731
+    grads = eqx.filter_grad(load)(point)
+    assert float(grads.mass) == pytest.approx(-g, rel=1e-12)
+    assert float(grads.volume) == pytest.approx(rho * g, rel=1e-12)
+    # ρ and g may come from the scene's environment instead
+    env_point = ConnectionPoint(800.0, [0, 0, -50.0], volume=vol, rho=None, g=None)
+    env = mj.Environment(200.0, rho, g, seabed=None)
+    assert float(env_point.mean_load(jnp.zeros(6), env=env)[2]) == pytest.approx(net, rel=1e-12)
+
+
+def test_equilibrium_state_vmaps_over_a_body_parameter():
+    """The jittable system statics, vmapped over the point's mass, equals the
+    members solved one by one; the point carrying the node mass (neutrally
+    buoyant) sits where the single line's node does."""
+    single = mj.Line(LT, (N1 + N2) * L_SEG, N1 + N2, mj.FixedEnd(A), mj.FixedEnd(B))
+    node = np.asarray(solve_line_statics(single, ENV).positions[N1])
+
+    def scene(mass):
+        return series(ConnectionPoint(mass, node + np.array([3.0, 0.0, 2.0]),
+                                      volume=NODE_MASS / 1025.0))
+
+    masses = [NODE_MASS, 1.5 * NODE_MASS]
+    scenes = [scene(m) for m in masses]
+    states, converged = ensemble_equilibrium(scenes)
+    assert np.all(np.asarray(converged))
+    body_states = np.asarray(states[-1])  # (members, 12)
+    for i, sc in enumerate(scenes):
+        one = equilibrium_state(sc)
+        assert bool(one.converged)
+        np.testing.assert_allclose(body_states[i], np.asarray(one.state[-1]), atol=1e-8)
+        for a, b in zip(jax.tree_util.tree_leaves(one.state[:2]),
+                        jax.tree_util.tree_leaves(states[:2])):
+            np.testing.assert_allclose(np.asarray(b[i]), np.asarray(a), atol=1e-8)
+    origin = np.asarray(scenes[0].bodies[0].origin)
+    np.testing.assert_allclose(origin + body_states[0, :3], node, atol=1e-6)
+    assert body_states[1, 2] < body_states[0, 2] - 0.1  # the heavier point sits lower
+    # a gradient through the vmapped statics reaches the point's mass
+    stacked = mj.ensemble.stack(scenes)
+    dz = eqx.filter_vmap(eqx.filter_grad(lambda s: equilibrium_state(s).state[-1][2]))(stacked)
+    assert np.all(np.asarray(dz.bodies[0].mass) < 0)
