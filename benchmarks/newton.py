@@ -2,7 +2,8 @@
 
 For each chord root finder (``VeryChord``: diffrax's test on the iterated stage
 derivatives [v, a]; ``StageChord``: the test on the stage state [r, v], see
-:mod:`moorjax.dynamics.newton`), each solver and case: adaptive runs at the
+:mod:`moorjax.dynamics.newton`; ``Refreshing``: StageChord rebuilding its
+iteration matrix on slow contraction), each solver and case: adaptive runs at the
 default tolerances (steps, rejected steps, ms per simulated second, error
 against the MoorDyn N = 160 reference over its std) and fixed-step runs (do
 they complete, and how accurate are they?).
@@ -15,6 +16,8 @@ from __future__ import annotations
 
 import os
 import sys
+
+import equinox as eqx
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -32,7 +35,13 @@ from benchmarks.common import (  # noqa: E402
 from moorjax.dynamics.newton import StageChord, VeryChord  # noqa: E402
 from moorjax.dynamics.solvers import make_solver  # noqa: E402
 
-NEWTONS = {"VeryChord": VeryChord, "StageChord": StageChord}
+class RefreshingChord(StageChord):
+    """StageChord rebuilding its matrix when Newton contracts slower than 0.25."""
+
+    refresh_rate: float | None = eqx.field(static=True, default=0.25)
+
+
+NEWTONS = {"VeryChord": VeryChord, "StageChord": StageChord, "Refreshing": RefreshingChord}
 #: (case, N, solver, fixed dt [s] or None)
 PLAN = [("A", 40, "kvaerno5", None), ("A", 40, "kvaerno3", None),
         ("A", 40, "kvaerno5", 1e-2), ("A", 40, "kvaerno5", 2e-2), ("A", 40, "kvaerno5", 5e-2),

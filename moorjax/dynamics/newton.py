@@ -66,14 +66,16 @@ class StageChord(VeryChord):
     tolerates, instead of iterating (or failing) to a 1/(γ·h)-times tighter
     goal.
 
-    When an iteration contracts slowly (rate ‖Δ_k‖/‖Δ_{k−1}‖ > ``refresh_rate``)
-    the iteration matrix I − γh·J is rebuilt at the current iterate: the matrix
-    built at the start of the step can miss a force that switched on within it
-    (a node landing on the seabed, a slack segment going taut). The rebuilt
-    matrix serves the rest of that stage.
+    With ``refresh_rate`` (e.g. 0.25), an iteration that contracts slowly (rate
+    ‖Δ_k‖/‖Δ_{k−1}‖ above it) rebuilds the iteration matrix I − γh·J at the
+    current iterate: the matrix built at the start of the step can miss a force
+    that switched on within it (a node landing on the seabed, a slack segment
+    going taut). The rebuilt matrix serves the rest of that stage. Off by
+    default (None: nothing traced): under ``vmap`` the conditional rebuild
+    becomes a rebuild on every iteration.
     """
 
-    refresh_rate: float = eqx.field(static=True, default=0.25)
+    refresh_rate: float | None = eqx.field(static=True, default=None)
 
     def step(self, fn, y, args, options, state, tags):
         stage = stage_arguments(args)
@@ -91,13 +93,14 @@ class StageChord(VeryChord):
             y_stage = (y_partial**ω + gamma_h * new_y**ω).ω
             scale = (self.atol + self.rtol * ω(y_stage).call(jnp.abs)).ω
             diffsize = self.norm((gamma_h * diff**ω / scale**ω).ω)
-        slow = (state.step >= 1) & (diffsize > self.refresh_rate * state.diffsize)
+        if self.refresh_rate is not None:
+            slow = (state.step >= 1) & (diffsize > self.refresh_rate * state.diffsize)
 
-        def rebuild(_):
-            op = lx.linearise(lx.JacobianLinearOperator(_NoAux(fn), new_y, args))
-            return lax.stop_gradient(self.linear_solver.init(op, options={}))
+            def rebuild(_):
+                op = lx.linearise(lx.JacobianLinearOperator(_NoAux(fn), new_y, args))
+                return lax.stop_gradient(self.linear_solver.init(op, options={}))
 
-        linear_state = lax.cond(slow, rebuild, lambda _: linear_state, None)
+            linear_state = lax.cond(slow, rebuild, lambda _: linear_state, None)
         new_state = type(state)(
             linear_state=(jac, linear_state),
             diff=diff,
