@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import diffrax
 import equinox as eqx
+import equinox.internal as eqxi
 import jax
 import jax.numpy as jnp
 import lineax as lx
@@ -70,12 +71,13 @@ class StageChord(VeryChord):
     ‖Δ_k‖/‖Δ_{k−1}‖ above it) rebuilds the iteration matrix I − γh·J at the
     current iterate: the matrix built at the start of the step can miss a force
     that switched on within it (a node landing on the seabed, a slack segment
-    going taut). The rebuilt matrix serves the rest of that stage. Off by
-    default (None: nothing traced): under ``vmap`` the conditional rebuild
-    becomes a rebuild on every iteration.
+    going taut). The rebuilt matrix serves the rest of that stage. Under
+    ``vmap`` (ensembles) all members rebuild when any one contracts slowly (a
+    fresh matrix never hurts a member), so the rebuild stays conditional.
+    ``None``: never rebuild (nothing traced).
     """
 
-    refresh_rate: float | None = eqx.field(static=True, default=None)
+    refresh_rate: float | None = eqx.field(static=True, default=0.25)
 
     def step(self, fn, y, args, options, state, tags):
         stage = stage_arguments(args)
@@ -100,7 +102,7 @@ class StageChord(VeryChord):
                 op = lx.linearise(lx.JacobianLinearOperator(_NoAux(fn), new_y, args))
                 return lax.stop_gradient(self.linear_solver.init(op, options={}))
 
-            linear_state = lax.cond(slow, rebuild, lambda _: linear_state, None)
+            linear_state = lax.cond(eqxi.unvmap_any(slow), rebuild, lambda _: linear_state, None)
         new_state = type(state)(
             linear_state=(jac, linear_state),
             diff=diff,
