@@ -67,7 +67,7 @@ class StageChord(VeryChord):
     tolerates, instead of iterating (or failing) to a 1/(γ·h)-times tighter
     goal.
 
-    With ``refresh_rate`` (e.g. 0.25), an iteration that contracts slowly (rate
+    With ``refresh_rate`` (default 0.5), an iteration that contracts slowly (rate
     ‖Δ_k‖/‖Δ_{k−1}‖ above it) rebuilds the iteration matrix I − γh·J at the
     current iterate: the matrix built at the start of the step can miss a force
     that switched on within it (a node landing on the seabed, a slack segment
@@ -77,7 +77,7 @@ class StageChord(VeryChord):
     ``None``: never rebuild (nothing traced).
     """
 
-    refresh_rate: float | None = eqx.field(static=True, default=0.25)
+    refresh_rate: float | None = eqx.field(static=True, default=0.5)
 
     def step(self, fn, y, args, options, state, tags):
         stage = stage_arguments(args)

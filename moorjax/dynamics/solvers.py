@@ -5,8 +5,10 @@ finder whose linear solves exploit the structure of the stage matrix: the
 Jacobian is rebuilt once per step from 18 coloured JVPs of the vector field, the
 positions are eliminated (``ṙ = v`` makes their rows trivial) and the remaining
 3×3 block-tridiagonal velocity system is factored in O(n)
-(:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). Explicit methods
-are there for comparison.
+(:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). The chord
+iteration (:class:`~moorjax.dynamics.newton.StageChord`, :data:`NEWTON`) tests
+convergence on the stage state and rebuilds the matrix within a step when it
+contracts slowly. Explicit methods are there for comparison.
 
 Error control measures positions [m] and velocities [m/s] on separate absolute
 scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
@@ -50,7 +52,7 @@ SOLVERS = tuple(sorted(IMPLICIT) + sorted(EXPLICIT))
 LINEAR_SOLVERS = ("reduced", "block", "dense")
 
 #: the implicit methods' default chord root finder
-NEWTON = VeryChord
+NEWTON = StageChord
 
 
 class StateNorm(eqx.Module):
