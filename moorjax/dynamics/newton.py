@@ -114,7 +114,6 @@ class StageChord(VeryChord):
         return new_y, new_state, aux
 
 
-
 class _NoAux(eqx.Module):
     fn: object
 
