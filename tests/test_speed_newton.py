@@ -92,7 +92,8 @@ def test_refresh_under_vmap_matches_single_runs():
             return jnp.concatenate([v, -1e4 * r - c * v * (1.0 + 1e2 * r**2)], axis=-1)
 
         y0 = jnp.array([[1e-1, -2e-1, 3e-1, 0.0, 0.0, 0.0]])
-        solver = diffrax.Kvaerno5(root_finder=diffrax.with_stepsize_controller_tols(StageChord)())
+        chord = diffrax.with_stepsize_controller_tols(StageChord)(refresh_rate=0.5)
+        solver = diffrax.Kvaerno5(root_finder=chord)
         sol = diffrax.diffeqsolve(diffrax.ODETerm(vf), solver, 0.0, 0.2, 1e-3, y0,
                                   stepsize_controller=diffrax.PIDController(rtol=1e-6, atol=1e-8),
                                   max_steps=100_000, throw=False)

@@ -67,17 +67,18 @@ class StageChord(VeryChord):
     tolerates, instead of iterating (or failing) to a 1/(γ·h)-times tighter
     goal.
 
-    With ``refresh_rate`` (default 0.5), an iteration that contracts slowly (rate
+    With ``refresh_rate`` (e.g. 0.5; default None: never), an iteration that contracts slowly (rate
     ‖Δ_k‖/‖Δ_{k−1}‖ above it) rebuilds the iteration matrix I − γh·J at the
     current iterate: the matrix built at the start of the step can miss a force
     that switched on within it (a node landing on the seabed, a slack segment
     going taut). The rebuilt matrix serves the rest of that stage. Under
     ``vmap`` (ensembles) all members rebuild when any one contracts slowly (a
-    fresh matrix never hurts a member), so the rebuild stays conditional.
-    ``None``: never rebuild (nothing traced).
+    fresh matrix never hurts a member). Measured: single runs of case A get
+    cheaper (CPU 19.4 → 16.5 ms per simulated s), but a 10-member ensemble of
+    case A costs 2× more per member than without it, so it is not the default.
     """
 
-    refresh_rate: float | None = eqx.field(static=True, default=0.5)
+    refresh_rate: float | None = eqx.field(static=True, default=None)
 
     def step(self, fn, y, args, options, state, tags):
         stage = stage_arguments(args)

@@ -7,8 +7,7 @@ positions are eliminated (``ṙ = v`` makes their rows trivial) and the remainin
 3×3 block-tridiagonal velocity system is factored in O(n)
 (:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). The chord
 iteration (:class:`~moorjax.dynamics.newton.StageChord`, :data:`NEWTON`) tests
-convergence on the stage state and rebuilds the matrix within a step when it
-contracts slowly. Explicit methods are there for comparison.
+convergence on the stage state. Explicit methods are there for comparison.
 
 Error control measures positions [m] and velocities [m/s] on separate absolute
 scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
