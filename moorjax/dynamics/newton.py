@@ -75,7 +75,7 @@ class StageChord(VeryChord):
     ``vmap`` (ensembles) all members rebuild when any one contracts slowly (a
     fresh matrix never hurts a member). Measured: single runs of case A get
     cheaper (CPU 19.4 → 16.5 ms per simulated s), but a 10-member ensemble of
-    case A costs 2× more per member than without it, so it is not the default.
+    case A cost 3.5× more per member than without it, so it is not the default.
     """
 
     refresh_rate: float | None = eqx.field(static=True, default=None)
