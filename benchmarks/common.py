@@ -261,4 +261,25 @@ def base_parser(doc: str):
                                 epilog=NOISE_NOTE)
     p.add_argument("--quick", action="store_true", help="small run (about 3 minutes)")
     p.add_argument("--json", metavar="PATH", help="write all figures to this JSON file")
+    p.add_argument("--reference", metavar="DIR", action=_ReferenceDir,
+                   help="folder of the reference data (ref_A.csv, …); default "
+                        "$MOORJAX_REFERENCE_DIR, else ../shared/reference beside the repository")
     return p
+
+
+def _reference_action():
+    import argparse
+
+    class ReferenceDir(argparse.Action):
+        """Sets the reference folder that :func:`reference_dir` returns."""
+
+        def __call__(self, parser, namespace, values, option_string=None):
+            if not os.path.isdir(values):
+                parser.error(f"--reference {values}: no such folder")
+            os.environ["MOORJAX_REFERENCE_DIR"] = os.path.abspath(values)
+            setattr(namespace, self.dest, values)
+
+    return ReferenceDir
+
+
+_ReferenceDir = _reference_action()

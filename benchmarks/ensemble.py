@@ -15,6 +15,7 @@ compared at equal accuracy, and the worker's peak memory.
 
     python benchmarks/ensemble.py [--cases A B] [--sizes 1 10 100 1000]
                                   [--duration 10] [--quick] [--json PATH]
+                                  [--reference DIR]
 """
 
 from __future__ import annotations
@@ -120,12 +121,17 @@ def moordyn_loop(case, duration, repeats=3):
 
 
 def main(argv=None):
+    from benchmarks.common import _ReferenceDir
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--cases", nargs="+", default=["A", "B"])
     ap.add_argument("--sizes", nargs="+", type=int, default=[1, 10, 100, 1000])
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--quick", action="store_true", help="sizes 1 10 100, 5 s")
     ap.add_argument("--json", help="write the figures here")
+    ap.add_argument("--reference", metavar="DIR", action=_ReferenceDir,
+                    help="folder of the reference data (default $MOORJAX_REFERENCE_DIR, else "
+                         "../shared/reference beside the repository); workers inherit it")
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "M"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:

@@ -12,7 +12,7 @@
     integrator, with XLA's backend-compile share) minus the run time of a second
     call. Target: under 5 s.
 
-    python benchmarks/scaling.py [--quick] [--json out.json]
+    python benchmarks/scaling.py [--quick] [--json out.json] [--reference DIR]
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ Each run must end with finite, plausible tensions or with moorjax's
 returns non-finite values without raising is flagged ``SILENT NaN`` and makes
 the script exit with status 1 (report it: it must never happen).
 
-    python benchmarks/stability.py [--quick] [--json out.json]
+    python benchmarks/stability.py [--quick] [--json out.json] [--reference DIR]
 """
 
 from __future__ import annotations

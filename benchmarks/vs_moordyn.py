@@ -23,8 +23,9 @@ of reach.
 
     python benchmarks/vs_moordyn.py [--cases A B] [--duration 20] [--quick]
                                     [--json out.json] [--plot out.png]
+                                    [--reference DIR]
 
-The reference data is looked for in $MOORJAX_REFERENCE_DIR (default
+The reference data is looked for in --reference DIR, else $MOORJAX_REFERENCE_DIR (default
 ../shared/reference relative to the repository); without it the error column
 is empty and a built-in list of MoorDyn settings is used.
 """

@@ -14,5 +14,9 @@ import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
 
+from ._cache import enable_compilation_cache as _enable_cache  # noqa: E402
+
+_enable_cache(_jax)
+
 from .model import *  # noqa: E402,F401,F403
 from .model import __all__ as _model_all  # noqa: E402,F401

@@ -5,8 +5,9 @@ finder whose linear solves exploit the structure of the stage matrix: the
 Jacobian is rebuilt once per step from 18 coloured JVPs of the vector field, the
 positions are eliminated (``ṙ = v`` makes their rows trivial) and the remaining
 3×3 block-tridiagonal velocity system is factored in O(n)
-(:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). Explicit methods
-are there for comparison.
+(:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). The chord
+iteration (:class:`~moorjax.dynamics.newton.StageChord`, :data:`NEWTON`) tests
+convergence on the stage state. Explicit methods are there for comparison.
 
 Error control measures positions [m] and velocities [m/s] on separate absolute
 scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
@@ -20,10 +21,13 @@ import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import optimistix as optx
 from jaxtyping import Array
 
 from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
+from .newton import StageChord, VeryChord
+
+__all__ = ["IMPLICIT", "EXPLICIT", "SOLVERS", "LINEAR_SOLVERS", "StateNorm", "make_solver",
+           "is_implicit", "StageChord", "VeryChord"]
 
 IMPLICIT = {
     "kvaerno3": diffrax.Kvaerno3,
@@ -46,25 +50,8 @@ SOLVERS = tuple(sorted(IMPLICIT) + sorted(EXPLICIT))
 
 LINEAR_SOLVERS = ("reduced", "block", "dense")
 
-
-class VeryChord(diffrax.VeryChord):
-    """diffrax's very-chord Newton, allowed to iterate past its second iteration.
-
-    With diffrax 0.7.2 and optimistix 0.1.0, ``VeryChord.terminate`` returns a
-    "diverged" result code on every iteration after the second that has not yet
-    converged, and optimistix stops its loop on any unsuccessful code. Newton
-    thus got at most two iterations per stage, and every stage that needed a
-    third was rejected and its step halved (upstream: optimistix#221, fixed by
-    optimistix#230 / diffrax#754, not released yet). Here the failure code is
-    reported only when the iteration really stops (divergence, linear-solve
-    failure); otherwise Newton continues up to the solver's iteration limit.
-    Measured: 40–55 % fewer steps and 1.4–1.8× less run time on the reference
-    cases, same errors.
-    """
-
-    def terminate(self, fn, y, args, options, state, tags):
-        stop, result = super().terminate(fn, y, args, options, state, tags)
-        return stop, optx.RESULTS.where(stop, result, optx.RESULTS.successful)
+#: the implicit methods' default chord root finder
+NEWTON = StageChord
 
 
 class StateNorm(eqx.Module):
@@ -108,6 +95,7 @@ def make_solver(
     norm=None,
     linear_solver: str = "reduced",
     dense_newton: bool = False,
+    newton=None,
 ):
     """A diffrax solver from its name (case-insensitive).
 
@@ -121,6 +109,10 @@ def make_solver(
             block-tridiagonal) or ``"dense"`` (dense LU, O(n³), for comparison
             and for Jacobians that are not banded).
         dense_newton: same as ``linear_solver="dense"`` (kept for compatibility).
+        newton: the chord root finder's class (default :data:`NEWTON`):
+            :class:`~moorjax.dynamics.newton.StageChord` (tolerances on the
+            stage state) or :class:`~moorjax.dynamics.newton.VeryChord`
+            (diffrax's, tolerances on the iterated stage derivatives).
     """
     key = name.lower().replace("-", "_")
     if key in EXPLICIT:
@@ -138,12 +130,13 @@ def make_solver(
         "block": {"linear_solver": BlockTridiagonalSolver()},
         "dense": {},
     }[linear_solver]
+    newton = NEWTON if newton is None else newton
     if newton_rtol is None:
-        root_finder = diffrax.with_stepsize_controller_tols(VeryChord)(**kwargs)
+        root_finder = diffrax.with_stepsize_controller_tols(newton)(**kwargs)
     else:
         if norm is not None:
             kwargs["norm"] = norm
-        root_finder = VeryChord(rtol=newton_rtol, atol=newton_atol, **kwargs)
+        root_finder = newton(rtol=newton_rtol, atol=newton_atol, **kwargs)
     return IMPLICIT[key](root_finder=root_finder)
 
 

@@ -115,7 +115,8 @@ def _seabed(lt, env, r, v, node_len):
     touching = depth_pen > 0
     area = lt.diameter * node_len
     normal = jnp.where(touching, bed.stiffness * depth_pen * area, 0.0)
-    vertical = normal - jnp.where(touching, bed.damping * v[:, 2] * area, 0.0)
+    ramp = bed.damping_fraction(depth_pen, lt.wet_weight(env.rho, env.g), lt.diameter)
+    vertical = normal - bed.damping * ramp * v[:, 2] * area
     vertical = vertical.at[jnp.array([0, -1])].add(_end_support(lt, env, depth_pen, node_len))
     force = jnp.zeros_like(r).at[:, 2].set(vertical)
     if bed.friction is not None:
@@ -157,7 +158,8 @@ def _seabed_3d(lt, bed, env, r, v, node_len):
     area = lt.diameter * node_len
     vn = jnp.sum(v * n, axis=-1)
     normal = jnp.where(touching, bed.stiffness * pen * area, 0.0)
-    magnitude = normal - jnp.where(touching, bed.damping * vn * area, 0.0)
+    ramp = bed.damping_fraction(pen, lt.wet_weight(env.rho, env.g), lt.diameter)
+    magnitude = normal - bed.damping * ramp * vn * area
     force = magnitude[:, None] * n
     # the bed carries the normal component of the grounded end's weight share; its
     # component along the slope stays on the end, as on an inclined catenary
