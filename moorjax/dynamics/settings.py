@@ -22,6 +22,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .adjoint import ADJOINTS, banded_jacobian, check_adjoint
+from .meter import StepMeter
 from .solvers import StateNorm, is_implicit, make_solver
 
 
@@ -184,7 +185,7 @@ def plan(
         )
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
 
-    meter = diffrax.TextProgressMeter() if progress else diffrax.NoProgressMeter()
+    meter = StepMeter() if progress else diffrax.NoProgressMeter()
     return Settings(
         ts, jnp.asarray(float(t0)), solver, controller, jnp.asarray(float(step0)),
         int(max_steps), bool(save_nodes), meter, name, adjoint, int(checkpoints),
