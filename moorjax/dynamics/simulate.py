@@ -175,7 +175,7 @@ def plan(
     element does not have a block-tridiagonal Jacobian (consistent mass).
     """
     if scene is not None and linear_solver in ("reduced", "block") and not all(
-        line.element.banded_jacobian for line in scene.lines
+        line.banded_jacobian for line in scene.lines
     ):
         linear_solver = "dense"
     if ts is None:

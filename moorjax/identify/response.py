@@ -212,7 +212,7 @@ class _StructuredOptimistix:
 
 def banded(scene) -> bool:
     """Whether every line's dynamics Jacobian is block-tridiagonal (nodal mass)."""
-    return all(getattr(line.element, "banded_jacobian", True) for line in scene.lines)
+    return all(line.banded_jacobian for line in scene.lines)
 
 
 @contextlib.contextmanager

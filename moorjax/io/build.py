@@ -84,7 +84,8 @@ def _line_type(dt, length, n_segments):
         ba = -ba * (length / n_segments) * np.sqrt(float(axial.nominal_ea()) * dt.mass_per_length)
     drag = MorisonDrag(dt.cd, dt.cd_axial) if (dt.cd > 0 or dt.cd_axial > 0) else None
     added = AddedMass(dt.ca, dt.ca_axial) if (dt.ca > 0 or dt.ca_axial > 0) else None
-    return LineType(dt.diameter, dt.mass_per_length, axial, ba, drag, added)
+    ei = dt.ei if dt.ei > 0 else None  # EI = 0: no bending term is traced
+    return LineType(dt.diameter, dt.mass_per_length, axial, ba, drag, added, ei=ei)
 
 
 def coupled_point_ids(deck: Deck) -> list[int]:
