@@ -261,7 +261,13 @@ def solve_line_statics(
             ``converged``).
     """
     _check_geometry(line, env, t)
-    out = _solve_core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
+    from ..element.hermite import HermiteElement
+
+    if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field
+        from .hermite import hermite_statics_core as core
+    else:
+        core = _solve_core
+    out = core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
     if throw:
         out = eqx.error_if(
             out,

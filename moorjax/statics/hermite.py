@@ -1,0 +1,107 @@
+"""Static equilibrium of a line of Hermite elements (:class:`HermiteElement`).
+
+The unknowns are the free node positions, every node's slope and the tension
+field (:class:`moorjax.element.hermite.HermiteDofs`); the residual is the
+element's generalised force on them and its extensibility equation
+(:func:`moorjax.element.hermite.static_residual`). Newton's method (optimistix,
+a dense LU: the slopes and tensions couple an element's two nodes fully) starts
+from the analytic elastic catenary — its positions, slopes dr/ds and the tension
+the axial law gives at its stretch — and attaches gradients by the implicit
+function theorem. Scaled as the linear element's statics: forces divided by the
+element stiffness EA/h, so each residual reads in metres.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+
+from .._numerics import safe_norm
+from ..element.hermite import WQ, HermiteDofs, element_fields, static_residual
+from ..model.line import Line
+
+
+def hermite_guess(line: Line, env, t=0.0) -> HermiteDofs:
+    """Unknowns from the analytic elastic catenary (the chord where it fails)."""
+    from .catenary import catenary_line_forces, catenary_nodes
+
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+    w = lt.wet_weight(env.rho, env.g)
+    touchdown = env.seabed is not None and jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
+    sol, _, _ = catenary_line_forces(ra, rb, line.length, lt.axial.nominal_ea(), w, 0.0, seabed=touchdown)
+    s = 0.5 * h * jnp.arange(2 * n + 1)  # nodes and element midpoints
+    point = lambda si: catenary_nodes(sol, ra, rb, si[None])[0]  # noqa: E731
+    r = catenary_nodes(sol, ra, rb, s[::2])
+    dr = jax.vmap(jax.jacfwd(point))(s)
+    lam = lt.axial.tension(safe_norm(dr) - 1.0)
+    ok = sol.converged & jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(dr))
+    chord = line.straight_state(t).r
+    r = jnp.where(ok, r.at[0].set(ra).at[-1].set(rb), jnp.concatenate([ra[None], chord, rb[None]]))
+    slope = (rb - ra) / line.length
+    dr = jnp.where(ok, dr[::2], jnp.broadcast_to(slope, (n + 1, 3)))
+    lam = jnp.where(ok, lam, jnp.abs(w) * line.length)
+    return HermiteDofs(r=r, dr=dr, lam=lam)
+
+
+def _assemble(line, ra, rb, y):
+    r_free, dr, lam = y
+    return HermiteDofs(r=jnp.concatenate([ra[None], r_free, rb[None]]), dr=dr, lam=lam)
+
+
+@eqx.filter_jit
+def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
+    """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    from .fem import LineStatics
+
+    lt = line.line_type
+    h = line.segment_length
+    k = lt.axial.nominal_ea() / h
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+    y0 = hermite_guess(line, env, t) if init is None else init
+    y0 = (y0.r[1:-1], y0.dr, y0.lam)
+
+    def fn(y, args):
+        del args
+        force, moment, constraint = static_residual(line, env, _assemble(line, ra, rb, y), t)
+        return force[1:-1] / k, moment / (k * h), constraint
+
+    solver = optx.Newton(rtol=rtol, atol=atol)
+    sol = optx.root_find(fn, solver, jax.lax.stop_gradient(y0), max_steps=max_steps, throw=False)
+    dofs = _assemble(line, ra, rb, sol.value)
+    force, moment, _ = static_residual(line, env, dofs, t)
+    weight = jnp.abs(lt.wet_weight(env.rho, env.g)) * h
+    scale = jnp.maximum(jnp.max(jnp.abs(dofs.lam)), weight)
+    res = jnp.maximum(jnp.max(jnp.abs(force[1:-1])), jnp.max(jnp.abs(moment)) / h)
+    _, _, cres = fn(sol.value, None)
+    converged = (
+        jnp.all(jnp.isfinite(dofs.r)) & (res < 1e-6 * scale) & (jnp.max(jnp.abs(cres)) < 1e-9 * line.length)
+    )
+    fa, fb = force[0], force[-1]
+    return LineStatics(
+        positions=dofs.r,
+        tensions=dofs.lam[1::2],
+        force_a=fa,
+        force_b=fb,
+        tension_a=jnp.linalg.norm(fa),
+        tension_b=jnp.linalg.norm(fb),
+        grounded_length=_grounded_length(line, env, dofs),
+        converged=converged,
+        iterations=sol.stats["num_steps"],
+        max_residual=res,
+    )
+
+
+def _grounded_length(line, env, dofs):
+    """Unstretched length carried by the seabed [m]: the contact force over the wet weight."""
+    if env.seabed is None:
+        return jnp.zeros(())
+    lt = line.line_type
+    w = lt.wet_weight(env.rho, env.g)
+    r, _, _, _ = element_fields(line, dofs)
+    pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
+    contact = env.seabed.stiffness * lt.diameter * jnp.sum(WQ * pen) * line.segment_length
+    return jnp.where(w > 0, contact / jnp.where(w > 0, w, 1.0), 0.0)
