@@ -134,3 +134,17 @@ def test_dynamics_are_refused_with_a_clear_error():
     r, v = jnp.zeros((5, 3)), jnp.zeros((5, 3))
     with pytest.raises(NotImplementedError, match="LinearElement"):
         line.element.nodal_forces(line, ENV, r, v)
+
+
+def test_cli_statics_with_hermite_elements(capsys):
+    """``moorjax statics DECK --element hermite``: the same JSON, 10 elements within 5e-4."""
+    import json
+
+    from moorjax.cli import main
+
+    assert main(["statics", "example:oc3_catenary", "--segments", "10", "--element", "hermite", "--json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)
+    ta, tb, _ = REF["A"]
+    assert abs(row["tension_a"] / ta - 1) < 5e-4 and abs(row["tension_b"] / tb - 1) < 5e-4
+    assert row["force_a"][2] == 0.0  # the seabed carries the grounded anchor's downward share
+    assert row["n_segments"] == 10

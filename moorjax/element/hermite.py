@@ -116,6 +116,9 @@ def _distributed_load(line, env, r, d1, t):
     lt = line.line_type
     q = jnp.zeros_like(r).at[..., 2].add(-lt.wet_weight(env.rho, env.g))
     if env.seabed is not None:
+        if env.seabed.bathymetry is not None:
+            raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported yet; "
+                             "use LinearElement for lines over a 3-D seabed")
         pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
         q = q.at[..., 2].add(env.seabed.stiffness * lt.diameter * pen)
     if lt.drag is not None and env.current is not None:

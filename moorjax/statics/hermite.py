@@ -80,7 +80,7 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     converged = (
         jnp.all(jnp.isfinite(dofs.r)) & (res < 1e-6 * scale) & (jnp.max(jnp.abs(cres)) < 1e-9 * line.length)
     )
-    fa, fb = force[0], force[-1]
+    fa, fb = _bed_support(line, env, dofs, force[0], force[-1])
     return LineStatics(
         positions=dofs.r,
         tensions=dofs.lam[1::2],
@@ -93,6 +93,26 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
         iterations=sol.stats["num_steps"],
         max_residual=res,
     )
+
+
+def _bed_support(line, env, dofs, fa, fb):
+    """End forces with the seabed carrying the downward push of an end held on it.
+
+    An end on the bed (an anchor) cannot be pushed into it: the bed takes the
+    downward part of the end's vertical force (the share of the first element's
+    weight that the coarse cubic does not lay on the bed), so the anchor feels the
+    grounded tension, as in the analytic catenary and the linear element. An end
+    the line lifts off (upward force) is unchanged.
+    """
+    if env.seabed is None:
+        return fa, fb
+    tol = 1e-6 * env.depth
+
+    def support(f, z_end):
+        on_bed = jnp.abs(z_end + env.depth) < tol
+        return f.at[2].set(jnp.where(on_bed, jnp.maximum(f[2], 0.0), f[2]))
+
+    return support(fa, dofs.r[0, 2]), support(fb, dofs.r[-1, 2])
 
 
 def _grounded_length(line, env, dofs):
