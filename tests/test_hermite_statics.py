@@ -148,3 +148,16 @@ def test_cli_statics_with_hermite_elements(capsys):
     assert abs(row["tension_a"] / ta - 1) < 5e-4 and abs(row["tension_b"] / tb - 1) < 5e-4
     assert row["force_a"][2] == 0.0  # the seabed carries the grounded anchor's downward share
     assert row["n_segments"] == 10
+
+
+def test_load_dependent_polyester_law_inside_the_newton():
+    """A nonlinear axial law enters through its inverse ε(λ): 5 Hermite elements
+    agree with the Richardson extrapolation of 80/160 linear elements to 5e-9."""
+    lt = mj.LineType(0.09, 77.7066, mj.PolyesterMBL(8.0e6, 9.0, 30.0))
+    ends = mj.FixedEnd(RA), mj.FixedEnd(RB)
+    lin = [SOLVE(mj.Line(lt, 640.0, n, *ends), ENV) for n in (80, 160)]
+    her = SOLVE(mj.Line(lt, 640.0, 5, *ends, element=HermiteElement()), ENV)
+    assert bool(her.converged)
+    for key in ("tension_a", "tension_b"):
+        extrapolated = (4 * float(getattr(lin[1], key)) - float(getattr(lin[0], key))) / 3
+        assert abs(float(getattr(her, key)) / extrapolated - 1) < 2e-8, key
