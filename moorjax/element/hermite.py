@@ -110,19 +110,31 @@ def _bending_density(ei, d1, d2):
     return 0.5 * ei * jnp.sum(c * c, axis=-1) / s2**3
 
 
-def _distributed_load(line, env, r, d1, t):
-    """External load per unstretched length (n, Q, 3) [N/m] at rest: weight and
-    buoyancy, seabed contact, drag of the current."""
+def _distributed_load(line, env, r, d1, t, v=None):
+    """External load per unstretched length (n, Q, 3) [N/m]: weight and buoyancy,
+    seabed contact (spring, and damper and friction when moving), Morison drag on
+    the velocity ``v`` relative to the current (``None``: at rest)."""
     lt = line.line_type
     q = jnp.zeros_like(r).at[..., 2].add(-lt.wet_weight(env.rho, env.g))
     if env.seabed is not None:
-        if env.seabed.bathymetry is not None:
+        bed = env.seabed
+        if bed.bathymetry is not None:
             raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported yet; "
                              "use LinearElement for lines over a 3-D seabed")
         pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
-        q = q.at[..., 2].add(env.seabed.stiffness * lt.diameter * pen)
-    if lt.drag is not None and env.current is not None:
-        u = -env.current.velocity(r[..., 2].reshape(-1), t).reshape(r.shape)
+        normal = bed.stiffness * lt.diameter * pen
+        q = q.at[..., 2].add(normal)
+        if v is not None:
+            q = q.at[..., 2].add(jnp.where(pen > 0, -bed.damping * lt.diameter * v[..., 2], 0.0))
+            if bed.friction is not None:
+                fr = bed.friction
+                uh = v[..., :2]
+                speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
+                q = q.at[..., :2].add(-(fr.mu * normal / speed)[..., None] * uh)
+    if lt.drag is not None and (env.current is not None or v is not None):
+        u = jnp.zeros_like(r) if v is None else v
+        if env.current is not None:
+            u = u - env.current.velocity(r[..., 2].reshape(-1), t).reshape(r.shape)
         stretch = safe_norm(d1)[..., None]
         tangent = d1 / jnp.maximum(stretch, 1e-300)
         ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
@@ -133,6 +145,83 @@ def _distributed_load(line, env, r, d1, t):
     return q
 
 
+def _interpolate(line, r_nodes, dr_nodes):
+    """Values (n, Q, 3) at the quadrature points of a nodal Hermite field."""
+    h = line.segment_length
+    u = jnp.stack([r_nodes[:-1], h * dr_nodes[:-1], r_nodes[1:], h * dr_nodes[1:]], axis=1)
+    return jnp.einsum("aq,nai->nqi", H, u)
+
+
+def _to_dofs(line, f, g, b):
+    """Generalised forces on (positions, slopes) (n+1, 3) each from quadrature-point
+    densities: Q_a = ∫ [ H_a f − H_a'/h g − H_a''/h² b ] ds."""
+    h = line.segment_length
+    w = WQ * h
+    qa = jnp.einsum("aq,q,nqi->nai", H, w, f) - jnp.einsum("aq,q,nqi->nai", DH, w / h, g)
+    if b is not None:
+        qa = qa - jnp.einsum("aq,q,nqi->nai", DDH, w / h**2, b)
+    zero = jnp.zeros((1, 3))
+    force = jnp.concatenate([qa[:, 0], zero]) + jnp.concatenate([zero, qa[:, 2]])
+    moment = h * (jnp.concatenate([qa[:, 1], zero]) + jnp.concatenate([zero, qa[:, 3]]))
+    return force, moment
+
+
+def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = None, t=0.0):
+    """All non-inertial generalised forces (n+1, 3) on the node positions [N] and
+    (n+1, 3) on the slopes [N·m]: tension λ/(1 + ε)·r' and internal damping
+    BA·dε/dt along the tangent, bending, and the distributed loads. ``vel`` holds
+    the node velocities and slope rates (``lam`` unused); ``None`` is at rest."""
+    lt = line.line_type
+    r, d1, d2, lam = element_fields(line, dofs)
+    eps = strain_of_tension(lt.axial, lam)
+    g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
+    v = None
+    if vel is not None:
+        v = _interpolate(line, vel.r, vel.dr)
+        h = line.segment_length
+        u = jnp.stack([vel.r[:-1], h * vel.dr[:-1], vel.r[1:], h * vel.dr[1:]], axis=1)
+        dv = jnp.einsum("aq,nai->nqi", DH, u) / h  # rate of r'
+        stretch = safe_norm(d1)
+        tangent = d1 / jnp.maximum(stretch, 1e-300)[..., None]
+        strain_rate = jnp.sum(tangent * dv, axis=-1)
+        g = g + (lt.damping * strain_rate)[..., None] * tangent
+    b = None
+    if lt.ei is not None:
+        gb, b = jax.grad(lambda a, c: jnp.sum(_bending_density(lt.ei, a, c)), argnums=(0, 1))(d1, d2)
+        g = g + gb
+    q = _distributed_load(line, env, r, d1, t, v)
+    return _to_dofs(line, q, g, b)
+
+
+def inertia_forces(line, env, dofs: HermiteDofs, acc: HermiteDofs):
+    """Generalised inertia forces ∫ H_a μ r̈ ds of the accelerations ``acc`` (node
+    accelerations and slope accelerations): the consistent mass m per unstretched
+    length and, with added mass, ρA·(Ca_n(I − ttᵀ) + Ca_ax·ttᵀ) per stretched length."""
+    lt = line.line_type
+    _, d1, _, _ = element_fields(line, dofs)
+    a = _interpolate(line, acc.r, acc.dr)
+    f = lt.mass_per_length * a
+    if lt.added_mass is not None:
+        stretch = safe_norm(d1)
+        tangent = d1 / jnp.maximum(stretch, 1e-300)[..., None]
+        at = jnp.sum(a * tangent, axis=-1, keepdims=True) * tangent
+        am = lt.added_mass
+        f = f + env.rho * lt.area * stretch[..., None] * (am.ca_normal * (a - at) + am.ca_axial * at)
+    return _to_dofs(line, f, jnp.zeros_like(f), None)
+
+
+def extensibility(line, dofs: HermiteDofs):
+    """The P_m-weighted extensibility integrals (2n+1,) [m] (Eq. 16/27)."""
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    _, d1, _, lam = element_fields(line, dofs)
+    eps = strain_of_tension(lt.axial, lam)
+    c = jnp.sum(d1 * d1, axis=-1) / (1.0 + eps) - (1.0 + eps)  # (n, Q)
+    ce = jnp.einsum("mq,q,nq->nm", P, WQ * h, c)  # (n, 3)
+    out = jnp.zeros(2 * n + 1)
+    return out.at[0:-1:2].add(ce[:, 0]).at[1::2].add(ce[:, 1]).at[2::2].add(ce[:, 2])
+
+
 def static_residual(line, env, dofs: HermiteDofs, t=0.0):
     """Generalised forces of the line at rest and the extensibility residuals.
 
@@ -141,29 +230,8 @@ def static_residual(line, env, dofs: HermiteDofs, t=0.0):
     the end nodes included; zero at equilibrium on free unknowns), and the
     P_m-weighted extensibility integrals.
     """
-    lt = line.line_type
-    h = line.segment_length
-    r, d1, d2, lam = element_fields(line, dofs)
-    eps = strain_of_tension(lt.axial, lam)
-    g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
-    b = jnp.zeros_like(d2)
-    if lt.ei is not None:
-        gb, b = jax.grad(lambda a, c: jnp.sum(_bending_density(lt.ei, a, c)), argnums=(0, 1))(d1, d2)
-        g = g + gb
-    q = _distributed_load(line, env, r, d1, t)
-    # Q_a = ∫ [ H_a q − H_a'/h g − H_a''/h² b ] ds, ds = h dξ
-    w = WQ * h
-    qa = (jnp.einsum("aq,q,nqi->nai", H, w, q) - jnp.einsum("aq,q,nqi->nai", DH, w / h, g)
-          - jnp.einsum("aq,q,nqi->nai", DDH, w / h**2, b))
-    n = line.n_segments
-    zero = jnp.zeros((1, 3))
-    force = jnp.concatenate([qa[:, 0], zero]) + jnp.concatenate([zero, qa[:, 2]])
-    moment = h * (jnp.concatenate([qa[:, 1], zero]) + jnp.concatenate([zero, qa[:, 3]]))
-    c = jnp.sum(d1 * d1, axis=-1) / (1.0 + eps) - (1.0 + eps)  # (n, Q)
-    ce = jnp.einsum("mq,q,nq->nm", P, w, c)  # (n, 3)
-    constraint = jnp.zeros(2 * n + 1)
-    constraint = constraint.at[0:-1:2].add(ce[:, 0]).at[1::2].add(ce[:, 1]).at[2::2].add(ce[:, 2])
-    return force, moment, constraint
+    force, moment = generalized_forces(line, env, dofs, None, t)
+    return force, moment, extensibility(line, dofs)
 
 
 class HermiteElement(AbstractElement):
