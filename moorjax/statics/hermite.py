@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .._numerics import safe_norm
-from ..element.hermite import WQ, HermiteDofs, element_fields, static_residual
+from ..element.hermite import WQ, HermiteDofs, element_fields, extensibility, static_residual
 from ..model.line import Line
 
 
@@ -52,11 +52,9 @@ def _assemble(line, ra, rb, y):
     return HermiteDofs(r=jnp.concatenate([ra[None], r_free, rb[None]]), dr=dr, lam=lam)
 
 
-@eqx.filter_jit
-def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
-    """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
-    from .fem import LineStatics
-
+def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None, *,
+                        rtol=1e-10, atol=1e-8, max_steps=500):
+    """The static unknowns (:class:`HermiteDofs`) and Newton's step count."""
     lt = line.line_type
     h = line.segment_length
     k = lt.axial.nominal_ea() / h
@@ -71,12 +69,22 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
 
     solver = optx.Newton(rtol=rtol, atol=atol)
     sol = optx.root_find(fn, solver, jax.lax.stop_gradient(y0), max_steps=max_steps, throw=False)
-    dofs = _assemble(line, ra, rb, sol.value)
+    return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
+
+
+@eqx.filter_jit
+def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
+    """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    from .fem import LineStatics
+
+    lt = line.line_type
+    h = line.segment_length
+    dofs, steps = hermite_equilibrium(line, env, t, init, rtol=rtol, atol=atol, max_steps=max_steps)
     force, moment, _ = static_residual(line, env, dofs, t)
     weight = jnp.abs(lt.wet_weight(env.rho, env.g)) * h
     scale = jnp.maximum(jnp.max(jnp.abs(dofs.lam)), weight)
     res = jnp.maximum(jnp.max(jnp.abs(force[1:-1])), jnp.max(jnp.abs(moment)) / h)
-    _, _, cres = fn(sol.value, None)
+    cres = extensibility(line, dofs)
     converged = (
         jnp.all(jnp.isfinite(dofs.r)) & (res < 1e-6 * scale) & (jnp.max(jnp.abs(cres)) < 1e-9 * line.length)
     )
@@ -90,7 +98,7 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
         tension_b=jnp.linalg.norm(fb),
         grounded_length=_grounded_length(line, env, dofs),
         converged=converged,
-        iterations=sol.stats["num_steps"],
+        iterations=steps,
         max_residual=res,
     )
 
