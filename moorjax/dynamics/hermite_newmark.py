@@ -11,9 +11,11 @@ check on the element and on diffrax runs, not the production driver.
 Measured on the reference case A (10 elements, dt = 0.01 s, 60 s, against
 MoorDyn at 160 segments): peaks within 0.4 % (1.948 vs 1.940 MN), RMS/std of the
 fairlead force 9.7 %, driven by the troughs: the tension falls to 12 kN where
-MoorDyn's stays at 89 kN, and there (t ≈ 4–6 s, the touchdown moving along a
-90 m element) Newton stalls at a scaled residual of 0.1 in three steps —
-the piecewise seabed penalty within a coarse cubic element is the suspect. The
+MoorDyn's stays at 89 kN. That is not the stepping: at dt = 0.005 s Newton
+converges in every step but one (at dt = 0.01 s it stalls at a scaled residual
+of 0.1 in three steps near t = 4–6 s) and the trough is the same 12 kN; the
+coarse cubic over the moving touchdown and the bilateral tension field (no
+slack) are the suspects, not yet measured. The
 first surge (0–2.5 s) is within 1.4 % RMS of the tension range.
 """
 
