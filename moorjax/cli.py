@@ -88,6 +88,14 @@ def _motion_path(args) -> str | None:
     return None
 
 
+def _element(args):
+    """The line discretisation named by ``--element`` (None: the default, linear)."""
+    from .element import HermiteElement, LinearElement
+
+    name = getattr(args, "element", "linear")
+    return {"linear": LinearElement(), "hermite": HermiteElement()}[name]
+
+
 def _load(args, motion_path=None):
     from .io import build_scene, read_deck, read_deck_motion
 
@@ -95,7 +103,8 @@ def _load(args, motion_path=None):
     motion = None
     if motion_path is not None:
         motion = read_deck_motion(motion_path, deck)
-    return deck, build_scene(deck, segments=args.segments, motion=motion), motion
+    scene = build_scene(deck, segments=args.segments, motion=motion, element=_element(args))
+    return deck, scene, motion
 
 
 def cmd_statics(args) -> int:
@@ -104,6 +113,11 @@ def cmd_statics(args) -> int:
     from .statics import solve_line_statics
 
     _, scene, _ = _load(args)
+    if scene.bodies and args.element == "hermite":
+        from .io.errors import InputError
+
+        raise InputError("--element hermite: decks with free points or bodies (system statics) "
+                         "are not supported by the Hermite element yet; use --element linear")
     if scene.bodies:
         # free points and bodies move to their equilibrium with the lines
         from .statics.system import solve_system_statics
@@ -324,6 +338,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     s.add_argument("--segments", type=_positive_int,
                    help="override every line's segment count (default: the deck's)")
+    s.add_argument("--element", choices=("linear", "hermite"), default="linear",
+                   help="line discretisation: Aamo & Fossen's linear element, or Wu et al.'s "
+                        "mixed Hermite-cubic element (statics only so far)")
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
     s.set_defaults(func=cmd_statics)
 

@@ -136,7 +136,7 @@ def diffrax_adjoint(settings, y0):
 
 def banded_jacobian(scene) -> bool:
     """Whether every line's dynamics Jacobian is block-tridiagonal (nodal mass)."""
-    return all(line.element.banded_jacobian for line in scene.lines)
+    return all(line.banded_jacobian for line in scene.lines)
 
 
 def banded(scene) -> bool:

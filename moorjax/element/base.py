@@ -23,6 +23,11 @@ class AbstractElement(eqx.Module):
         solves exploit). Elements coupling further must return ``False``."""
         return True
 
+    def line_banded(self, line) -> bool:
+        """``banded_jacobian`` for this element on ``line`` (a line's section can
+        couple nodes further, as bending stiffness does). Default: the element's."""
+        return self.banded_jacobian
+
     @abc.abstractmethod
     def nodal_forces(self, line, env, r, v, t=0.0):
         """All non-inertial forces on every node (n+1, 3) [N], ends included, at

@@ -11,7 +11,13 @@ unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on th
   (stretched length ℓ_j/2), split on t_j into axial and normal parts (Eq. 7, f_dt,
   f_dn);
 - seabed contact on nodes below z = −depth (MoorDyn's vertical spring–damper on
-  d·l_node), with optional smoothed friction.
+  d·l_node), with optional smoothed friction;
+- bending, when the line type has ``ei``: the curvature at each interior node k
+  from the turning of the tangent between its two segments, κ_k = |κb_k|/l with
+  κb = 2·t_{k−1}×t_k/(1 + t_{k−1}·t_k) (|κb| = 2·tan(θ/2) ≈ θ, the discrete
+  curvature of elastic rods, smooth through the straight state), in the beam
+  energy ½·EI·κ²·l per node; forces are minus its gradient. End nodes carry no
+  moment (pinned ends).
 
 Absent structure (no drag, no seabed, no current) is never traced.
 """
@@ -46,6 +52,9 @@ class LinearElement(AbstractElement):
     @property
     def banded_jacobian(self) -> bool:
         return self.mass.banded
+
+    def line_banded(self, line) -> bool:
+        return self.mass.banded and line.line_type.ei is None
 
     # -- geometry -------------------------------------------------------------
     @staticmethod
@@ -84,6 +93,8 @@ class LinearElement(AbstractElement):
 
         if env.seabed is not None:
             force = force + _seabed(lt, env, r, v, node_len)
+        if lt.ei is not None:
+            force = force + _bending(lt.ei, line.segment_length, r)
         return force
 
     def accelerations(self, line, env, t, r, v):
@@ -94,6 +105,29 @@ class LinearElement(AbstractElement):
     def end_forces(self, line, env, r, v, t=0.0):
         force = self.nodal_forces(line, env, r, v, t)
         return force[0], force[-1]
+
+
+def bending_energy(ei, l, r):
+    """Beam energy Σ_k ½·EI·κ_k²·l [J] of the polyline r (n+1, 3) with segment length l.
+
+    κ_k = |κb_k|/l at the interior nodes, κb = 2·t_a×t_b/(1 + t_a·t_b) for the unit
+    tangents t_a, t_b of the segments before and after node k: |κb| = 2·tan(θ/2)
+    for the turning angle θ, so κ → θ/l for small turning, and the energy and its
+    gradient are smooth when the line is straight (no norm of a zero cross product).
+    """
+    t, _ = safe_unit(r[1:] - r[:-1])
+    ta, tb = t[:-1], t[1:]
+    cross = jnp.cross(ta, tb)
+    dot = jnp.sum(ta * tb, axis=-1)
+    kb2 = 4.0 * jnp.sum(cross * cross, axis=-1) / (1.0 + dot) ** 2
+    return 0.5 * ei / l * jnp.sum(kb2)
+
+
+def _bending(ei, l, r):
+    """Bending forces (n+1, 3) [N]: minus the gradient of :func:`bending_energy`."""
+    import jax
+
+    return -jax.grad(bending_energy, argnums=2)(ei, l, r)
 
 
 def _drag(lt, env, u, tangent, stretched):

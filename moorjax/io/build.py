@@ -84,7 +84,8 @@ def _line_type(dt, length, n_segments):
         ba = -ba * (length / n_segments) * np.sqrt(float(axial.nominal_ea()) * dt.mass_per_length)
     drag = MorisonDrag(dt.cd, dt.cd_axial) if (dt.cd > 0 or dt.cd_axial > 0) else None
     added = AddedMass(dt.ca, dt.ca_axial) if (dt.ca > 0 or dt.ca_axial > 0) else None
-    return LineType(dt.diameter, dt.mass_per_length, axial, ba, drag, added)
+    ei = dt.ei if dt.ei > 0 else None  # EI = 0: no bending term is traced
+    return LineType(dt.diameter, dt.mass_per_length, axial, ba, drag, added, ei=ei)
 
 
 def coupled_point_ids(deck: Deck) -> list[int]:
@@ -150,7 +151,7 @@ def body_reference_end(deck: Deck, body_id: int, motion: Motion | None = None):
     return FixedEnd(body.position)
 
 
-def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
+def build_scene(deck: Deck, segments: int | None = None, motion=None, element=None) -> Scene:
     """A :class:`Scene` from a deck.
 
     Args:
@@ -158,6 +159,7 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         segments: overrides every line's segment count.
         motion: optional :class:`moorjax.io.Motion` driving coupled points and
             coupled bodies (read it with :func:`read_deck_motion`).
+        element: the discretisation of every line (default: ``LinearElement()``).
 
     Raises:
         InputError: bad ``segments``, no water depth, or a body kind that cannot
@@ -201,7 +203,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None) -> Scene:
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
-        lines.append(Line(lt, dl.length, n, ends[dl.point_a], ends[dl.point_b], label=str(dl.id)))
+        lines.append(Line(lt, dl.length, n, ends[dl.point_a], ends[dl.point_b], element=element,
+                          label=str(dl.id)))
 
     seabed = None
     # neutral lines (to rounding) can be pushed onto the seabed too

@@ -64,6 +64,12 @@ class Line(eqx.Module):
         self.label = str(label)
 
     @property
+    def banded_jacobian(self) -> bool:
+        """Whether a free node's force depends only on itself and its two neighbours
+        (block-tridiagonal Jacobian): the element's answer for this line."""
+        return self.element.line_banded(self)
+
+    @property
     def segment_length(self) -> Array:
         """Unstretched element length l = L/n [m]."""
         return self.length / self.n_segments

@@ -13,6 +13,10 @@ Conventions (the same as MoorDyn's, so that its decks mean the same here):
 - Added mass per unit length: ρ·A·(Ca_n·(I − ttᵀ) + Ca_ax·ttᵀ).
 - ``damping`` is MoorDyn's BA as a coefficient in N·s: the damping tension is
   BA·dε/dt. (A negative BA in a deck means −ζ and is converted by the deck builder.)
+- ``ei`` is the bending stiffness EI [N·m²] (MoorDyn's EI column). It is structure
+  too: ``None`` (the default, EI = 0) traces no bending term; a number, even 0,
+  gives the term with a differentiable coefficient. Bending couples a node to its
+  second neighbours, so a line with EI has no block-tridiagonal Jacobian.
 """
 
 from __future__ import annotations
@@ -62,6 +66,7 @@ class LineType(eqx.Module):
         drag: Morison drag coefficients, or ``None`` for no drag.
         added_mass: added-mass coefficients, or ``None`` for none.
         mbl: minimum breaking load [N], informative (``None`` if unknown).
+        ei: bending stiffness EI [N·m²], or ``None`` for none (EI = 0, untraced).
     """
 
     diameter: Array
@@ -71,6 +76,7 @@ class LineType(eqx.Module):
     drag: MorisonDrag | None
     added_mass: AddedMass | None
     mbl: Array | None
+    ei: Array | None
 
     def __init__(
         self,
@@ -81,6 +87,7 @@ class LineType(eqx.Module):
         drag: MorisonDrag | None = None,
         added_mass: AddedMass | None = None,
         mbl=None,
+        ei=None,
     ):
         check_positive(diameter, "diameter", "m")
         check_positive(mass_per_length, "mass per length", "kg/m")
@@ -90,6 +97,9 @@ class LineType(eqx.Module):
         if mbl is not None:
             check_positive(mbl, "MBL", "N")
             mbl = jnp.asarray(mbl, dtype=float)
+        if ei is not None:
+            check_nonnegative(ei, "bending stiffness EI", "N·m²")
+            ei = jnp.asarray(ei, dtype=float)
         self.diameter = jnp.asarray(diameter, dtype=float)
         self.mass_per_length = jnp.asarray(mass_per_length, dtype=float)
         self.axial = axial
@@ -97,6 +107,7 @@ class LineType(eqx.Module):
         self.drag = drag
         self.added_mass = added_mass
         self.mbl = mbl
+        self.ei = ei
 
     @property
     def area(self) -> Array:

@@ -122,32 +122,43 @@ def _force_scale(line, env, t):
 _ALPHAS = 2.0 ** -jnp.arange(16)
 
 
-def _descent(fn, y0, tol, max_steps, soft_length):
+def _band_step(fn, y, fy, mu):
+    """Solve (μI − J)·Δy = f with J's block-tridiagonal band (coloured JVPs, O(n))."""
+    _, lin = jax.linearize(lambda z: fn(z, None), y)
+    lower, diag, upper, _, _ = band_of(lin, jax.ShapeDtypeStruct(y.shape, y.dtype))
+    return btd.solve(btd.factor(-lower, mu * jnp.eye(3) - diag, -upper), fy)
+
+
+def _dense_step(fn, y, fy, mu):
+    """Solve (μI − J)·Δy = f with the dense Jacobian (lines coupling nodes further:
+    bending stiffness)."""
+    m = y.size
+    jac = jax.jacfwd(lambda z: fn(z, None).reshape(-1))(y).reshape(m, m)
+    return jnp.linalg.solve(mu * jnp.eye(m) - jac, fy.reshape(-1)).reshape(y.shape)
+
+
+def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step):
     """Regularised Newton with an exact line search on the static energy.
 
     Without a current the static forces are the negative gradient of a convex
     energy (a tension-only axial law with nondecreasing tension, gravity, the
     one-sided seabed spring), so every step is a descent step of that energy:
     the direction solves (μI − J)·Δy = f with the block-tridiagonal band of J
-    (coloured JVPs, O(n)), μ = max|f|/soft_length keeps it defined where J is
+    (coloured JVPs, O(n); ``step``), μ = max|f|/soft_length keeps it defined where J is
     singular (slack or unloaded directions move at most ~soft_length per step),
     and the step length is where the energy stops decreasing along Δy: the sign
     change of g(α) = −f(y + αΔy)·Δy, bracketed on α = 1, ½, … (vmapped) and
     interpolated. Touchdown and slack kinks only make g piecewise smooth, so the
     iteration cannot stall on them. Stops when max|f| ≤ tol(y). Returns (y, iterations).
     """
-    eye = jnp.eye(3)
-
     def cond(c):
         _, _, it, done = c
         return (it < max_steps) & jnp.invert(done)
 
     def body(c):
         y, fy, it, _ = c
-        _, lin = jax.linearize(lambda z: fn(z, None), y)
-        lower, diag, upper, _, _ = band_of(lin, jax.ShapeDtypeStruct(y.shape, y.dtype))
         mu = jnp.max(jnp.abs(fy)) / soft_length
-        dy = btd.solve(btd.factor(-lower, mu * eye - diag, -upper), fy)
+        dy = step(fn, y, fy, mu)
         dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f
         g = jax.vmap(lambda a: -jnp.sum(fn(y + a * dy, None) * dy))(_ALPHAS)
         g = jnp.where(jnp.isfinite(g), g, jnp.inf)
@@ -250,7 +261,13 @@ def solve_line_statics(
             ``converged``).
     """
     _check_geometry(line, env, t)
-    out = _solve_core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
+    from ..element.hermite import HermiteElement
+
+    if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field
+        from .hermite import hermite_statics_core as core
+    else:
+        core = _solve_core
+    out = core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
     if throw:
         out = eqx.error_if(
             out,
@@ -282,8 +299,11 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     def tol(y):
         return jnp.maximum(jnp.minimum(atol, 1e-8 * scale(y) / k), floor(y))
 
-    r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length)
-    solver = optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver())
+    banded = line.banded_jacobian
+    r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
+                                     _band_step if banded else _dense_step)
+    solver = (optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver()) if banded
+              else optx.Newton(rtol=rtol, atol=atol))
     sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
     # A polish that fails (NaN where the Jacobian is singular: slack line piled on
     # the bed) or does worse leaves the descent's iterate; either is judged by its

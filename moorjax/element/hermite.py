@@ -1,0 +1,266 @@
+"""Wu et al.'s mixed element: Hermite-cubic position, quadratic tension field.
+
+The line's position r(s) over unstretched arc length s is C¹ piecewise cubic:
+each node k carries its position r_k and slope r'_k = dr/ds (|r'| = 1 + ε), and
+element e (length h = L/n, ξ = (s − s_e)/h) interpolates
+
+    r(ξ) = H₁ r_e + h H₂ r'_e + H₃ r_{e+1} + h H₄ r'_{e+1},
+    H₁ = 1 − 3ξ² + 2ξ³, H₂ = ξ − 2ξ² + ξ³, H₃ = 3ξ² − 2ξ³, H₄ = ξ³ − ξ².
+
+The effective tension λ(s) is continuous and piecewise quadratic, with values at
+the nodes and at the element midpoints (2n + 1 unknowns; Lagrange P₁, P₂, P₃ on
+ξ = 0, ½, 1). The two equations (Wu et al. Eq. 17–18/19, 27, written with the
+axial law's exact strain ε(λ) instead of its second-order series):
+
+- equilibrium, for every virtual Hermite δr:
+  ∫ [ λ/(1 + ε(λ)) · r'·δr' + ∂e_b/∂r'·δr' + ∂e_b/∂r''·δr'' − q·δr ] ds = end forces·δr,
+  with q the weight/buoyancy, seabed contact and (static) current drag per
+  unstretched length and e_b = ½·EI·κ² the bending energy density (κ² =
+  |r'×r''|²/|r'|⁶, natural here: the slopes are unknowns);
+- extensibility (Eq. 16), weighted by each P_m: ∫ P_m [ r'·r'/(1 + ε) − (1 + ε) ] ds = 0.
+
+Integrals use 5-point Gauss–Legendre per element. The axial law enters through
+its inverse ε(λ) (exact for a linear EA, Newton iterations otherwise); the
+element is bilateral in compression (ε = λ/EA for λ < 0): a slack stretch is not
+modelled. Ends are pinned (the end slopes are unknowns with zero end moment).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.lax as lax
+import jax.numpy as jnp
+import numpy as np
+
+from .._numerics import abs_times, safe_norm
+from ..model.axial import Bilateral, LinearEA
+from .base import AbstractElement
+
+_GX, _GW = np.polynomial.legendre.leggauss(5)
+XI = jnp.asarray(0.5 * (_GX + 1.0))  # quadrature points on [0, 1]
+WQ = jnp.asarray(0.5 * _GW)  # and weights (sum 1)
+
+
+def _hermite(xi):
+    """Shape functions (4, Q) and their first and second ξ-derivatives."""
+    x2, x3 = xi * xi, xi * xi * xi
+    h = jnp.stack([1 - 3 * x2 + 2 * x3, xi - 2 * x2 + x3, 3 * x2 - 2 * x3, x3 - x2])
+    d = jnp.stack([-6 * xi + 6 * x2, 1 - 4 * xi + 3 * x2, 6 * xi - 6 * x2, 3 * x2 - 2 * xi])
+    dd = jnp.stack([-6 + 12 * xi, -4 + 6 * xi, 6 - 12 * xi, 6 * xi - 2])
+    return h, d, dd
+
+
+def _lagrange(xi):
+    """Quadratic Lagrange functions on ξ = 0, ½, 1: (3, Q)."""
+    return jnp.stack([(1 - xi) * (1 - 2 * xi), 4 * xi * (1 - xi), xi * (2 * xi - 1)])
+
+
+H, DH, DDH = _hermite(XI)
+P = _lagrange(XI)
+
+
+class HermiteDofs(eqx.Module):
+    """Unknowns of a Hermite line: node positions (n+1, 3) [m], node slopes
+    dr/ds (n+1, 3) [-] and the tension field at nodes and midpoints (2n+1,) [N]."""
+
+    r: jax.Array
+    dr: jax.Array
+    lam: jax.Array
+
+
+def strain_of_tension(law, lam):
+    """Strain ε [-] at effective tension λ [N]: the inverse of the axial law.
+
+    Exact for a linear EA; otherwise Newton iterations on ``tension_positive``
+    from λ/EA, the last step taken on a stopped-gradient iterate so that the
+    derivative is the implicit one, 1/T'(ε). Compression: ε = λ/EA (bilateral).
+    """
+    ea = law.nominal_ea()
+    inner = law.law if isinstance(law, Bilateral) else law
+    if isinstance(inner, LinearEA):
+        return lam / ea
+    pos = jnp.maximum(lam, 0.0)
+
+    def newton(e):
+        t, dt = jax.jvp(inner.tension_positive, (e,), (jnp.ones_like(e),))
+        return jnp.maximum(e - (t - pos) / dt, 0.0)
+
+    e = lax.fori_loop(0, 40, lambda _, e: newton(e), pos / ea)
+    e = newton(lax.stop_gradient(e))
+    return jnp.where(lam >= 0.0, e, lam / ea)
+
+
+def element_fields(line, dofs: HermiteDofs):
+    """Per element and quadrature point (n, Q, ·): r, r', r'' and λ."""
+    h = line.segment_length
+    u = jnp.stack([dofs.r[:-1], h * dofs.dr[:-1], dofs.r[1:], h * dofs.dr[1:]], axis=1)  # (n,4,3)
+    r = jnp.einsum("aq,nai->nqi", H, u)
+    d1 = jnp.einsum("aq,nai->nqi", DH, u) / h
+    d2 = jnp.einsum("aq,nai->nqi", DDH, u) / h**2
+    lam_e = jnp.stack([dofs.lam[0:-1:2], dofs.lam[1::2], dofs.lam[2::2]], axis=1)  # (n,3)
+    lam = jnp.einsum("mq,nm->nq", P, lam_e)
+    return r, d1, d2, lam
+
+
+def _bending_density(ei, d1, d2):
+    """½·EI·κ² [N] with κ² = |r'×r''|²/|r'|⁶ (exact curvature of an extensible curve)."""
+    c = jnp.cross(d1, d2)
+    s2 = jnp.sum(d1 * d1, axis=-1)
+    return 0.5 * ei * jnp.sum(c * c, axis=-1) / s2**3
+
+
+def _distributed_load(line, env, r, d1, t, v=None):
+    """External load per unstretched length (n, Q, 3) [N/m]: weight and buoyancy,
+    seabed contact (spring, and damper and friction when moving), Morison drag on
+    the velocity ``v`` relative to the current (``None``: at rest)."""
+    lt = line.line_type
+    q = jnp.zeros_like(r).at[..., 2].add(-lt.wet_weight(env.rho, env.g))
+    if env.seabed is not None:
+        bed = env.seabed
+        if bed.bathymetry is not None:
+            raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported yet; "
+                             "use LinearElement for lines over a 3-D seabed")
+        pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
+        normal = bed.stiffness * lt.diameter * pen
+        q = q.at[..., 2].add(normal)
+        if v is not None:
+            q = q.at[..., 2].add(jnp.where(pen > 0, -bed.damping * lt.diameter * v[..., 2], 0.0))
+            if bed.friction is not None:
+                fr = bed.friction
+                uh = v[..., :2]
+                speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
+                q = q.at[..., :2].add(-(fr.mu * normal / speed)[..., None] * uh)
+    if lt.drag is not None and (env.current is not None or v is not None):
+        u = jnp.zeros_like(r) if v is None else v
+        if env.current is not None:
+            u = u - env.current.velocity(r[..., 2].reshape(-1), t).reshape(r.shape)
+        stretch = safe_norm(d1)[..., None]
+        tangent = d1 / jnp.maximum(stretch, 1e-300)
+        ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
+        un = u - ut
+        cn = 0.5 * env.rho * lt.drag.cd_normal * lt.diameter
+        ca = 0.5 * env.rho * lt.drag.cd_axial * jnp.pi * lt.diameter
+        q = q - stretch * (cn * abs_times(un) + ca * abs_times(ut))
+    return q
+
+
+def _interpolate(line, r_nodes, dr_nodes):
+    """Values (n, Q, 3) at the quadrature points of a nodal Hermite field."""
+    h = line.segment_length
+    u = jnp.stack([r_nodes[:-1], h * dr_nodes[:-1], r_nodes[1:], h * dr_nodes[1:]], axis=1)
+    return jnp.einsum("aq,nai->nqi", H, u)
+
+
+def _to_dofs(line, f, g, b):
+    """Generalised forces on (positions, slopes) (n+1, 3) each from quadrature-point
+    densities: Q_a = ∫ [ H_a f − H_a'/h g − H_a''/h² b ] ds."""
+    h = line.segment_length
+    w = WQ * h
+    qa = jnp.einsum("aq,q,nqi->nai", H, w, f) - jnp.einsum("aq,q,nqi->nai", DH, w / h, g)
+    if b is not None:
+        qa = qa - jnp.einsum("aq,q,nqi->nai", DDH, w / h**2, b)
+    zero = jnp.zeros((1, 3))
+    force = jnp.concatenate([qa[:, 0], zero]) + jnp.concatenate([zero, qa[:, 2]])
+    moment = h * (jnp.concatenate([qa[:, 1], zero]) + jnp.concatenate([zero, qa[:, 3]]))
+    return force, moment
+
+
+def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = None, t=0.0):
+    """All non-inertial generalised forces (n+1, 3) on the node positions [N] and
+    (n+1, 3) on the slopes [N·m]: tension λ/(1 + ε)·r' and internal damping
+    BA·dε/dt along the tangent, bending, and the distributed loads. ``vel`` holds
+    the node velocities and slope rates (``lam`` unused); ``None`` is at rest."""
+    lt = line.line_type
+    r, d1, d2, lam = element_fields(line, dofs)
+    eps = strain_of_tension(lt.axial, lam)
+    g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
+    v = None
+    if vel is not None:
+        v = _interpolate(line, vel.r, vel.dr)
+        h = line.segment_length
+        u = jnp.stack([vel.r[:-1], h * vel.dr[:-1], vel.r[1:], h * vel.dr[1:]], axis=1)
+        dv = jnp.einsum("aq,nai->nqi", DH, u) / h  # rate of r'
+        stretch = safe_norm(d1)
+        tangent = d1 / jnp.maximum(stretch, 1e-300)[..., None]
+        strain_rate = jnp.sum(tangent * dv, axis=-1)
+        g = g + (lt.damping * strain_rate)[..., None] * tangent
+    b = None
+    if lt.ei is not None:
+        gb, b = jax.grad(lambda a, c: jnp.sum(_bending_density(lt.ei, a, c)), argnums=(0, 1))(d1, d2)
+        g = g + gb
+    q = _distributed_load(line, env, r, d1, t, v)
+    return _to_dofs(line, q, g, b)
+
+
+def inertia_forces(line, env, dofs: HermiteDofs, acc: HermiteDofs):
+    """Generalised inertia forces ∫ H_a μ r̈ ds of the accelerations ``acc`` (node
+    accelerations and slope accelerations): the consistent mass m per unstretched
+    length and, with added mass, ρA·(Ca_n(I − ttᵀ) + Ca_ax·ttᵀ) per stretched length."""
+    lt = line.line_type
+    _, d1, _, _ = element_fields(line, dofs)
+    a = _interpolate(line, acc.r, acc.dr)
+    f = lt.mass_per_length * a
+    if lt.added_mass is not None:
+        stretch = safe_norm(d1)
+        tangent = d1 / jnp.maximum(stretch, 1e-300)[..., None]
+        at = jnp.sum(a * tangent, axis=-1, keepdims=True) * tangent
+        am = lt.added_mass
+        f = f + env.rho * lt.area * stretch[..., None] * (am.ca_normal * (a - at) + am.ca_axial * at)
+    return _to_dofs(line, f, jnp.zeros_like(f), None)
+
+
+def extensibility(line, dofs: HermiteDofs):
+    """The P_m-weighted extensibility integrals (2n+1,) [m] (Eq. 16/27)."""
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    _, d1, _, lam = element_fields(line, dofs)
+    eps = strain_of_tension(lt.axial, lam)
+    c = jnp.sum(d1 * d1, axis=-1) / (1.0 + eps) - (1.0 + eps)  # (n, Q)
+    ce = jnp.einsum("mq,q,nq->nm", P, WQ * h, c)  # (n, 3)
+    out = jnp.zeros(2 * n + 1)
+    return out.at[0:-1:2].add(ce[:, 0]).at[1::2].add(ce[:, 1]).at[2::2].add(ce[:, 2])
+
+
+def static_residual(line, env, dofs: HermiteDofs, t=0.0):
+    """Generalised forces of the line at rest and the extensibility residuals.
+
+    Returns ``(force_r (n+1, 3) [N], moment_dr (n+1, 3) [N·m], constraint (2n+1,) [m])``:
+    the generalised forces on the node positions and slopes (the line's pull on
+    the end nodes included; zero at equilibrium on free unknowns), and the
+    P_m-weighted extensibility integrals.
+    """
+    force, moment = generalized_forces(line, env, dofs, None, t)
+    return force, moment, extensibility(line, dofs)
+
+
+class HermiteElement(AbstractElement):
+    """Wu et al.'s mixed Hermite-cubic element (statics; see the module docstring).
+
+    Its unknowns are not node positions alone (:class:`HermiteDofs`), so its
+    statics has its own solve (:func:`moorjax.statics.hermite.solve_hermite_statics`,
+    called by :func:`moorjax.statics.fem.solve_line_statics`). The node-position
+    interface of the dynamics driver is not available for it yet.
+    """
+
+    @property
+    def banded_jacobian(self) -> bool:
+        return False
+
+    def _no_dynamics(self):
+        raise NotImplementedError(
+            "HermiteElement: dynamics are not implemented yet (its state carries slopes and a "
+            "tension field); use LinearElement for simulate/fit/ensembles"
+        )
+
+    def nodal_forces(self, line, env, r, v, t=0.0):
+        self._no_dynamics()
+
+    def accelerations(self, line, env, t, r, v):
+        self._no_dynamics()
+
+    def segment_tensions(self, line, r, v):
+        self._no_dynamics()
+
+    def end_forces(self, line, env, r, v, t=0.0):
+        self._no_dynamics()

@@ -1,0 +1,135 @@
+"""Static equilibrium of a line of Hermite elements (:class:`HermiteElement`).
+
+The unknowns are the free node positions, every node's slope and the tension
+field (:class:`moorjax.element.hermite.HermiteDofs`); the residual is the
+element's generalised force on them and its extensibility equation
+(:func:`moorjax.element.hermite.static_residual`). Newton's method (optimistix,
+a dense LU: the slopes and tensions couple an element's two nodes fully) starts
+from the analytic elastic catenary — its positions, slopes dr/ds and the tension
+the axial law gives at its stretch — and attaches gradients by the implicit
+function theorem. Scaled as the linear element's statics: forces divided by the
+element stiffness EA/h, so each residual reads in metres.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import optimistix as optx
+
+from .._numerics import safe_norm
+from ..element.hermite import WQ, HermiteDofs, element_fields, extensibility, static_residual
+from ..model.line import Line
+
+
+def hermite_guess(line: Line, env, t=0.0) -> HermiteDofs:
+    """Unknowns from the analytic elastic catenary (the chord where it fails)."""
+    from .catenary import catenary_line_forces, catenary_nodes
+
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+    w = lt.wet_weight(env.rho, env.g)
+    touchdown = env.seabed is not None and jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
+    sol, _, _ = catenary_line_forces(ra, rb, line.length, lt.axial.nominal_ea(), w, 0.0, seabed=touchdown)
+    s = 0.5 * h * jnp.arange(2 * n + 1)  # nodes and element midpoints
+    point = lambda si: catenary_nodes(sol, ra, rb, si[None])[0]  # noqa: E731
+    r = catenary_nodes(sol, ra, rb, s[::2])
+    dr = jax.vmap(jax.jacfwd(point))(s)
+    lam = lt.axial.tension(safe_norm(dr) - 1.0)
+    ok = sol.converged & jnp.all(jnp.isfinite(r)) & jnp.all(jnp.isfinite(dr))
+    chord = line.straight_state(t).r
+    r = jnp.where(ok, r.at[0].set(ra).at[-1].set(rb), jnp.concatenate([ra[None], chord, rb[None]]))
+    slope = (rb - ra) / line.length
+    dr = jnp.where(ok, dr[::2], jnp.broadcast_to(slope, (n + 1, 3)))
+    lam = jnp.where(ok, lam, jnp.abs(w) * line.length)
+    return HermiteDofs(r=r, dr=dr, lam=lam)
+
+
+def _assemble(line, ra, rb, y):
+    r_free, dr, lam = y
+    return HermiteDofs(r=jnp.concatenate([ra[None], r_free, rb[None]]), dr=dr, lam=lam)
+
+
+def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None, *,
+                        rtol=1e-10, atol=1e-8, max_steps=500):
+    """The static unknowns (:class:`HermiteDofs`) and Newton's step count."""
+    lt = line.line_type
+    h = line.segment_length
+    k = lt.axial.nominal_ea() / h
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+    y0 = hermite_guess(line, env, t) if init is None else init
+    y0 = (y0.r[1:-1], y0.dr, y0.lam)
+
+    def fn(y, args):
+        del args
+        force, moment, constraint = static_residual(line, env, _assemble(line, ra, rb, y), t)
+        return force[1:-1] / k, moment / (k * h), constraint
+
+    solver = optx.Newton(rtol=rtol, atol=atol)
+    sol = optx.root_find(fn, solver, jax.lax.stop_gradient(y0), max_steps=max_steps, throw=False)
+    return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
+
+
+@eqx.filter_jit
+def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
+    """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    from .fem import LineStatics
+
+    lt = line.line_type
+    h = line.segment_length
+    dofs, steps = hermite_equilibrium(line, env, t, init, rtol=rtol, atol=atol, max_steps=max_steps)
+    force, moment, _ = static_residual(line, env, dofs, t)
+    weight = jnp.abs(lt.wet_weight(env.rho, env.g)) * h
+    scale = jnp.maximum(jnp.max(jnp.abs(dofs.lam)), weight)
+    res = jnp.maximum(jnp.max(jnp.abs(force[1:-1])), jnp.max(jnp.abs(moment)) / h)
+    cres = extensibility(line, dofs)
+    converged = (
+        jnp.all(jnp.isfinite(dofs.r)) & (res < 1e-6 * scale) & (jnp.max(jnp.abs(cres)) < 1e-9 * line.length)
+    )
+    fa, fb = _bed_support(line, env, dofs, force[0], force[-1])
+    return LineStatics(
+        positions=dofs.r,
+        tensions=dofs.lam[1::2],
+        force_a=fa,
+        force_b=fb,
+        tension_a=jnp.linalg.norm(fa),
+        tension_b=jnp.linalg.norm(fb),
+        grounded_length=_grounded_length(line, env, dofs),
+        converged=converged,
+        iterations=steps,
+        max_residual=res,
+    )
+
+
+def _bed_support(line, env, dofs, fa, fb):
+    """End forces with the seabed carrying the downward push of an end held on it.
+
+    An end on the bed (an anchor) cannot be pushed into it: the bed takes the
+    downward part of the end's vertical force (the share of the first element's
+    weight that the coarse cubic does not lay on the bed), so the anchor feels the
+    grounded tension, as in the analytic catenary and the linear element. An end
+    the line lifts off (upward force) is unchanged.
+    """
+    if env.seabed is None:
+        return fa, fb
+    tol = 1e-6 * env.depth
+
+    def support(f, z_end):
+        on_bed = jnp.abs(z_end + env.depth) < tol
+        return f.at[2].set(jnp.where(on_bed, jnp.maximum(f[2], 0.0), f[2]))
+
+    return support(fa, dofs.r[0, 2]), support(fb, dofs.r[-1, 2])
+
+
+def _grounded_length(line, env, dofs):
+    """Unstretched length carried by the seabed [m]: the contact force over the wet weight."""
+    if env.seabed is None:
+        return jnp.zeros(())
+    lt = line.line_type
+    w = lt.wet_weight(env.rho, env.g)
+    r, _, _, _ = element_fields(line, dofs)
+    pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
+    contact = env.seabed.stiffness * lt.diameter * jnp.sum(WQ * pen) * line.segment_length
+    return jnp.where(w > 0, contact / jnp.where(w > 0, w, 1.0), 0.0)
