@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-_TINY = 1e-300
-
 
 def safe_norm(x, axis=-1, keepdims=False):
     """Euclidean norm whose gradient is 0 (not NaN) at ``x = 0``."""
@@ -20,13 +18,8 @@ def safe_norm(x, axis=-1, keepdims=False):
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0)
 
 
-def smooth_norm(x, eps, axis=-1, keepdims=False):
-    """``sqrt(|x|² + eps²)``: a norm regularised at the origin (eps in x's unit)."""
-    return jnp.sqrt(jnp.sum(x * x, axis=axis, keepdims=keepdims) + eps * eps)
-
-
 def safe_unit(x, axis=-1):
-    """``x/|x|`` with value and derivative 0 at ``x = 0``; also returns ``|x|``."""
+    """``x/|x|``, 0 at ``x = 0`` with a finite derivative there (the identity); also returns ``|x|``."""
     n = safe_norm(x, axis=axis, keepdims=True)
     unit = x / jnp.where(n > 0, n, 1.0)
     return unit, jnp.squeeze(n, axis=axis)

@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import errno
 import json
-import re
 import sys
 import time
 import warnings
@@ -20,6 +19,7 @@ import warnings
 import numpy as np
 
 from . import __version__
+from ._cli_common import HelpFormatter, clip, deck_path
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 
@@ -37,43 +37,13 @@ exit codes: 0 ok, 2 bad input or usage, 3 the numerics failed, 4 out of memory o
 another resource, 130 interrupted. 'moorjax COMMAND --help' shows each command's options."""
 
 
-class HelpFormatter(argparse.RawDescriptionHelpFormatter):
-    """Keeps the epilog's layout and appends defaults that mean something."""
-
-    def _get_help_string(self, action):
-        text = action.help or ""
-        if "%(default)" in text or "default" in text:
-            return text
-        if action.option_strings and not any(action.default is v for v in (None, False, True)) \
-                and action.default != argparse.SUPPRESS:
-            text += " (default: %(default)s)"
-        return text
-
-
 class ArgumentParser(argparse.ArgumentParser):
     def error(self, message):
         self.print_usage(sys.stderr)
         self.exit(EXIT_INPUT, f"{self.prog}: error: {clip(message)}\n")
 
 
-def clip(text: str, longest: int = 80) -> str:
-    """``text`` with every token longer than ``longest`` characters shortened."""
-    def short(m):
-        tok = m.group(0)
-        return f"{tok[:40]}…[{len(tok) - 50} more characters]…{tok[-10:]}"
-    text = re.sub(rf"\S{{{longest + 1},}}", short, str(text))
-    return text if len(text) <= 2000 else text[:2000] + f"… [{len(text) - 2000} more characters]"
-
-
 # ------------------------------------------------------------------ loading
-
-
-def _deck_path(arg: str) -> str:
-    if arg.startswith("example:"):
-        from .examples import example_path
-
-        return example_path(arg.split(":", 1)[1])
-    return arg
 
 
 def _motion_path(args) -> str | None:
@@ -99,7 +69,7 @@ def _element(args):
 def _load(args, motion_path=None):
     from .io import build_scene, read_deck, read_deck_motion
 
-    deck = read_deck(_deck_path(args.deck))
+    deck = read_deck(deck_path(args.deck))
     motion = None
     if motion_path is not None:
         motion = read_deck_motion(motion_path, deck)
@@ -294,7 +264,7 @@ def cmd_simulate(args) -> int:
 
 
 def _deck_text(deck_arg) -> str:
-    with open(_deck_path(deck_arg), encoding="utf-8", errors="replace") as f:
+    with open(deck_path(deck_arg), encoding="utf-8", errors="replace") as f:
         return f.read()
 
 

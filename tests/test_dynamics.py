@@ -13,16 +13,9 @@ from moorjax.dynamics import simulate
 from moorjax.dynamics.vector_field import pack, vector_field
 from moorjax.linalg.banded_solver import BlockTridiagonalSolver
 from moorjax.statics import solve_line_statics
+from scenes import case_b_scene
 
 DATA = os.path.join(os.path.dirname(__file__), "data")
-
-
-def case_b_scene(n, end_b=None):
-    lt = mj.LineType(0.12, 10.8, 1.5e8, 1.771e5, mj.MorisonDrag(1.6, 0.05), mj.AddedMass(1.0, 0.0))
-    env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
-    end_b = end_b if end_b is not None else mj.SinePath([0, 0, -5.0], [2, 0, 0], 8.0)
-    line = mj.Line(lt, 110.0, n, mj.FixedEnd([-80.5168, 0, -80]), end_b)
-    return mj.Scene([line], env)
 
 
 def test_band_jacobian_equals_dense_jacobian():

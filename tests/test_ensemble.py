@@ -19,6 +19,7 @@ from moorjax.dynamics.vector_field import _line_rate, line_groups, pack, vector_
 from moorjax.ensemble import StructureMismatchError, simulate_ensemble, stack, status
 from moorjax.ensemble.run import TRACES
 from moorjax.ensemble.store import load, run_chunked
+from scenes import case_b_line_type, case_b_scene
 
 # tight tolerances: members differ from single runs only by roundoff-driven Newton
 # termination decisions, whose effect is of the order of the Newton tolerance
@@ -27,12 +28,7 @@ DURATION = 2.0
 
 
 def scene(cd=1.6, ea=1.5e8, amp=1.0, n=6, drag=True):
-    lt = mj.LineType(0.12, 10.8, ea, 1.771e5,
-                     mj.MorisonDrag(cd, 0.05) if drag else None, mj.AddedMass(1.0, 0.0))
-    env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
-    line = mj.Line(lt, 110.0, n, mj.FixedEnd([-80.5168, 0, -80]),
-                   mj.SinePath([0, 0, -5.0], [amp, 0, 0], 8.0))
-    return mj.Scene([line], env)
+    return case_b_scene(n, mj.SinePath([0, 0, -5.0], [amp, 0, 0], 8.0), case_b_line_type(ea, cd, drag))
 
 
 MEMBERS = [scene(1.2, 1.4e8, 0.5), scene(1.6, 1.5e8, 1.0), scene(2.0, 1.7e8, 1.5)]
@@ -112,7 +108,7 @@ def test_chunked_run_matches_and_resumes(tmp_path, batch_result):
 
 
 def test_lines_of_equal_structure_are_grouped():
-    lt = mj.LineType(0.12, 10.8, 1.5e8, 1.771e5, mj.MorisonDrag(1.6, 0.05), mj.AddedMass(1.0, 0.0))
+    lt = case_b_line_type()
     env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
     lines = []
     for k in range(4):

@@ -22,12 +22,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import moorjax as mj
 from moorjax.identify import experiment, simulation
 from moorjax.identify.objective import contract, misfit_and_gradient, tangent, with_values
 from moorjax.io import build_scene, read_deck
 from moorjax.io.motion import Motion
 from moorjax.model.parameters import get_parameter
+from scenes import case_b_scene, polyester_scene
 
 DATA = os.path.join(os.path.dirname(__file__), "data")
 
@@ -52,24 +52,7 @@ def catenary_scene(segments=6):
     return build_scene(deck, segments=segments, motion=catenary_motion())
 
 
-POLY_TRUE = dict(alpha=18.5, beta=33.0, Cd_normal=1.6, Cd_axial=0.1)
 TS_POLY = np.arange(1, 301) * 0.01  # 3 s, sampled at 100 Hz [s]
-
-
-def polyester_scene(centre=(0.0, 0.0, -5.0), amplitude=(0.5, 0.0, 0.0), period=4.0,
-                    phase=np.pi / 2, length=109.5, current=(0.0, 0.0, 0.0), n=8, **values):
-    """A polyester line (d = 0.12 m, 15.6 kg/m, MBL 7.5 MN) with the MBL-normalised
-    load-dependent stiffness EA(T) = MBL·(α + β·T/MBL), between a point 20 m above
-    the seabed and a fairlead on a sine path (starting at rest: phase π/2). With the
-    default length and centre (case B geometry) it is taut, pretension ≈ 10 % MBL."""
-    v = dict(POLY_TRUE, **values)
-    law = mj.PolyesterMBL(7.5e6, v["alpha"], v["beta"])
-    lt = mj.LineType(0.12, 15.6, law, 1.771e5, mj.MorisonDrag(v["Cd_normal"], v["Cd_axial"]),
-                     mj.AddedMass(1.0, 0.1))
-    env = mj.Environment(100.0, seabed=mj.Seabed(3e6, 3e5), current=mj.UniformCurrent(current))
-    end_b = mj.SinePath(list(centre), list(amplitude), period, phase)
-    line = mj.Line(lt, length, n, mj.FixedEnd([-80.5168, 0.0, -80.0]), end_b)
-    return mj.Scene([line], env)
 
 
 def simulated(scene, ts, channels):
@@ -183,11 +166,7 @@ def _slack_and_snap_gradient():
     from moorjax.model.parameters import set_parameter
     from moorjax.statics import solve_line_statics
 
-    lt = mj.LineType(0.12, 10.8, 1.5e8, 1.771e5, mj.MorisonDrag(1.6, 0.05), mj.AddedMass(1.0, 0.0))
-    env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))
-    line = mj.Line(lt, 110.0, 8, mj.FixedEnd([-80.5168, 0, -80]),
-                   mj.SinePath([0, 0, -5.0], [2.0, 0, 0], 8.0))
-    scene = mj.Scene([line], env)
+    scene = case_b_scene(8)
     names = ("Cd", "CdAx", "EA", "BA", "length", "xB")
     x0 = jnp.array([float(get_parameter(scene, n)) for n in names])
 

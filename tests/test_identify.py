@@ -22,26 +22,14 @@ import moorjax as mj
 from moorjax.identify import experiment, fit, load_experiment, loss_and_gradient, simulation
 from moorjax.identify.objective import misfit_and_gradient
 from moorjax.io.motion import Motion
+from scenes import POLY_TRUE, polyester_scene
 
 DATA = os.path.join(os.path.dirname(__file__), "data")
 DT = 0.01
 
 # ----------------------------------------- the cases of tests/test_gradients.py
-TRUE = dict(alpha=18.5, beta=33.0, Cd_normal=1.6, Cd_axial=0.1)
+TRUE = POLY_TRUE
 TS = np.arange(1, 301) * 0.01  # 3 s at 100 Hz [s]
-
-
-def polyester_scene(centre=(0.0, 0.0, -5.0), amplitude=(0.5, 0.0, 0.0), period=4.0,
-                    phase=np.pi / 2, length=109.5, current=(0.0, 0.0, 0.0), n=8):
-    """Polyester line, EA(T) = MBL·(α + β·T/MBL), fairlead on a sine path (same as
-    ``tests/test_gradients.py``)."""
-    law = mj.PolyesterMBL(7.5e6, TRUE["alpha"], TRUE["beta"])
-    lt = mj.LineType(0.12, 15.6, law, 1.771e5, mj.MorisonDrag(TRUE["Cd_normal"], TRUE["Cd_axial"]),
-                     mj.AddedMass(1.0, 0.1))
-    env = mj.Environment(100.0, seabed=mj.Seabed(3e6, 3e5), current=mj.UniformCurrent(current))
-    end_b = mj.SinePath(list(centre), list(amplitude), period, phase)
-    line = mj.Line(lt, length, n, mj.FixedEnd([-80.5168, 0.0, -80.0]), end_b)
-    return mj.Scene([line], env)
 
 
 CAMPAIGN = {

@@ -20,9 +20,8 @@ import sys
 
 def add_parser(subparsers):
     """Add the ``fit`` sub-command to an ``argparse`` sub-parser collection."""
+    from .._cli_common import HelpFormatter
     from ..dynamics.solvers import SOLVERS
-
-    from ..cli import HelpFormatter
 
     f = subparsers.add_parser(
         "fit", help="fit line parameters to a measured tension history",
@@ -62,9 +61,9 @@ def add_parser(subparsers):
 
 def _prefixed(name, line):
     """``Cd`` -> ``L<line>.Cd`` for a line parameter when --line is given."""
-    from ..model.parameters import PARAMETERS, _split
+    from ..model.parameters import PARAMETERS, split_name
 
-    label, base = _split(name)
+    label, base = split_name(name)
     if line is None or label is not None or base not in PARAMETERS:
         return name
     return f"L{line}.{name}" if PARAMETERS[base].scope == "line" else name
@@ -111,8 +110,8 @@ def _parse_window(text):
 def cmd_fit(args) -> int:
     import optax
 
+    from .._cli_common import deck_path
     from .._progress import Progress, enabled
-    from ..cli import _deck_path
     from ..io.results import check_output
     from .experiment import load_experiment
     from .fit import default_optimizer, fit
@@ -127,7 +126,7 @@ def cmd_fit(args) -> int:
     given, names = _parse_params(args.params, args.line)
     starts = _parse_start(args.start, names, args.line)
     exp = load_experiment(
-        _deck_path(args.deck), motion, args.target, segments=args.segments,
+        deck_path(args.deck), motion, args.target, segments=args.segments,
         line=args.line, window=_parse_window(args.window),
     )
     free = [Free(n, starts.get(n)) for n in names]

@@ -18,9 +18,6 @@ experiments of different amplitude.
 
 from __future__ import annotations
 
-import csv
-import io
-import math
 import re
 from pathlib import Path
 
@@ -29,6 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from ..io.table import read_table
 from ..model.ends import TabulatedPath
 
 _CHANNEL_RE = re.compile(r"^L(?P<id>[^_]+)_tension_(?P<end>[ab])$", re.IGNORECASE)
@@ -178,50 +176,16 @@ def _check_motion_span(scene, ts, name):
                 )
 
 
-_NUM_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
-
-
 def read_target(path) -> dict[str, np.ndarray]:
     """Read a measured-tension CSV: a header row then numbers (``t`` [s] first).
 
     Returns ``{column: values}`` (column names as in the file, ``t`` as "t").
-    Raises ``ValueError`` naming ``file:line`` for an empty file, a missing ``t``
-    column, ragged rows, non-numeric or non-finite cells, fewer than 2 rows or
-    times that are not strictly increasing.
+    Raises :class:`~moorjax.io.InputError` (a ``ValueError``) naming
+    ``file:line`` for an empty file, a missing ``t`` column, ragged rows,
+    non-numeric or non-finite cells, fewer than 2 rows or times that are not
+    strictly increasing (:mod:`moorjax.io.table`).
     """
-    name = str(path)
-    text = Path(path).read_text(encoding="utf-8-sig", errors="replace")
-    records = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        if raw.strip() and not raw.strip().startswith("#"):
-            records.append((lineno, [c.strip() for c in next(csv.reader(io.StringIO(raw)))]))
-    if not records:
-        raise ValueError(f"{name}: the file is empty; expected a header row 't,L<id>_tension_b,...'")
-    hline, header = records[0]
-    lower = [h.lower() for h in header]
-    if "t" not in lower:
-        raise ValueError(f"{name}:{hline}: missing time column 't' [s]; found columns: {', '.join(header)}")
-    for h in set(lower):
-        if lower.count(h) > 1:
-            raise ValueError(f"{name}:{hline}: column {h!r} appears twice")
-    rows = records[1:]
-    if len(rows) < 2:
-        raise ValueError(f"{name}: {len(rows)} data row(s); expected at least 2")
-    data = np.empty((len(rows), len(header)))
-    for i, (lineno, cells) in enumerate(rows):
-        if len(cells) != len(header):
-            raise ValueError(f"{name}:{lineno}: {len(cells)} cells, expected {len(header)} (one per column)")
-        for j, c in enumerate(cells):
-            if not _NUM_RE.match(c) or not math.isfinite(float(c)):
-                raise ValueError(f"{name}:{lineno}: column {header[j]!r} = {c!r} is not a finite number")
-            data[i, j] = float(c)
-    out = {("t" if h.lower() == "t" else h): data[:, j] for j, h in enumerate(header)}
-    t = out["t"]
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        k = int(bad[0])
-        raise ValueError(f"{name}:{rows[k + 1][0]}: t = {t[k + 1]} s is not after {t[k]} s; times must increase")
-    return out
+    return read_table(path, "t,L<id>_tension_b,...").by_column()
 
 
 def target_channels(columns, scene, line=None, path="target") -> list[str]:

@@ -30,24 +30,16 @@ Pure Python + numpy; no JAX.
 
 from __future__ import annotations
 
-import csv
-import io
-import math
-import re
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from .errors import InputError, InputWarning
+from .table import Table, read_table
 
 __all__ = ["Motion", "read_motion"]
-
-_POSE = ("x", "y", "z", "roll", "pitch", "yaw")
-_FLOAT_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
-_NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)\Z", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -73,6 +65,24 @@ class Motion:
     path: str
     body_poses: dict[int, np.ndarray] = field(default_factory=dict)
     body_rates: dict[int, np.ndarray | None] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class _Kind:
+    """How the columns of one kind of object (point or body) are named and described."""
+
+    noun: str  # "point", "body"
+    prefix: str  # column prefix, "P" / "B"
+    coords: tuple[str, ...]  # position columns; the rates are "v" + each
+    rate_word: str  # "velocity" / "rate"
+    count_word: str  # "three" / "six"
+    rate_unit: str
+    missing_note: str  # after the missing column names; {ids} is filled in
+
+
+_POINT = _Kind("point", "P", ("x", "y", "z"), "velocity", "three", "[m/s]", " [m] for point id(s) {ids}")
+_BODY = _Kind("body", "B", ("x", "y", "z", "roll", "pitch", "yaw"), "rate", "six", "[m/s, rad/s]",
+              " for body id(s) {ids} (x, y, z [m] of the reference point; roll, pitch, yaw [rad])")
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -114,141 +124,64 @@ def read_motion(path, point_ids: Sequence[int], body_ids: Sequence[int] = ()) ->
     """
     ids = _ids(point_ids, "point_ids")
     bids = _ids(body_ids, "body_ids")
+    table = read_table(path, "t,P<id>_x,...")
+    pos_cols, vel_cols, wanted = _columns(table, _POINT, ids)
+    pose_cols, rate_cols, body_wanted = _columns(table, _BODY, bids)
+    wanted = {"t", *wanted, *body_wanted}
 
-    name = str(path)
-    text = Path(path).read_text(encoding="utf-8-sig", errors="replace")
-
-    # (file line number, cells) for every non-blank, non-comment line
-    records: list[tuple[int, list[str]]] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        stripped = raw.strip()
-        if not stripped or stripped.startswith("#"):
-            continue
-        cells = next(csv.reader(io.StringIO(raw)))
-        records.append((lineno, [c.strip() for c in cells]))
-    if not records:
-        raise InputError(f"{name}: the file is empty; expected a header row 't,P<id>_x,...' and data rows")
-
-    header_line, header = records[0]
-    columns: dict[str, int] = {}
-    for j, col in enumerate(header):
-        key = col.lower()
-        if not key:
-            raise InputError(f"{name}:{header_line}: header column {j + 1} has no name")
-        if key in columns:
-            raise InputError(
-                f"{name}:{header_line}: column {col!r} appears twice (columns {columns[key] + 1} and {j + 1})"
-            )
-        columns[key] = j
-    found = ", ".join(header)
-
-    if "t" not in columns:
-        raise InputError(f"{name}:{header_line}: missing time column 't' [s]; found columns: {found}")
-
-    wanted: list[str] = ["t"]
-    pos_cols: dict[int, list[int]] = {}
-    vel_cols: dict[int, list[int] | None] = {}
-    missing: list[str] = []
-    for pid in ids:
-        names = [f"P{pid}_{c}" for c in ("x", "y", "z")]
-        lacking = [n for n in names if n.lower() not in columns]
-        missing.extend(lacking)
-        if not lacking:
-            pos_cols[pid] = [columns[n.lower()] for n in names]
-        wanted.extend(names)
-        vnames = [f"P{pid}_{c}" for c in ("vx", "vy", "vz")]
-        present = [n for n in vnames if n.lower() in columns]
-        if present and len(present) < 3:
-            absent = [n for n in vnames if n.lower() not in columns]
-            raise InputError(
-                f"{name}:{header_line}: point {pid} has velocity column(s) {', '.join(present)} "
-                f"but not {', '.join(absent)}; give all three of {', '.join(vnames)} [m/s] or none"
-            )
-        vel_cols[pid] = [columns[n.lower()] for n in vnames] if present else None
-        wanted.extend(present)
-    if missing:
-        raise InputError(
-            f"{name}:{header_line}: missing column(s) {', '.join(missing)} [m] for point id(s) "
-            f"{', '.join(str(i) for i in ids)}; found columns: {found}"
-        )
-
-    pose_cols: dict[int, list[int]] = {}
-    rate_cols: dict[int, list[int] | None] = {}
-    missing = []
-    for bid in bids:
-        names = [f"B{bid}_{c}" for c in _POSE]
-        lacking = [n for n in names if n.lower() not in columns]
-        missing.extend(lacking)
-        if not lacking:
-            pose_cols[bid] = [columns[n.lower()] for n in names]
-        wanted.extend(names)
-        rnames = [f"B{bid}_v{c}" for c in _POSE]
-        present = [n for n in rnames if n.lower() in columns]
-        if present and len(present) < 6:
-            absent = [n for n in rnames if n.lower() not in columns]
-            raise InputError(
-                f"{name}:{header_line}: body {bid} has rate column(s) {', '.join(present)} "
-                f"but not {', '.join(absent)}; give all six of {', '.join(rnames)} "
-                "[m/s, rad/s] or none"
-            )
-        rate_cols[bid] = [columns[n.lower()] for n in rnames] if present else None
-        wanted.extend(present)
-    if missing:
-        raise InputError(
-            f"{name}:{header_line}: missing column(s) {', '.join(missing)} for body id(s) "
-            f"{', '.join(str(i) for i in bids)} (x, y, z [m] of the reference point; roll, pitch, "
-            f"yaw [rad]); found columns: {found}"
-        )
-
-    extra = [col for col in header if col.lower() not in {w.lower() for w in wanted}]
+    extra = [col for col in table.header if col.lower() not in wanted]
     if extra:
         requested = f"requested point ids: {', '.join(str(i) for i in ids) or 'none'}"
         if bids:
             requested += f"; body ids: {', '.join(str(i) for i in bids)}"
         warnings.warn(
-            f"{name}:{header_line}: column(s) {', '.join(extra)} not used ({requested})",
+            f"{table.path}:{table.header_line}: column(s) {', '.join(extra)} not used ({requested})",
             InputWarning,
             stacklevel=2,
         )
 
-    rows = records[1:]
-    if len(rows) < 2:
-        raise InputError(f"{name}: {len(rows)} data row(s); expected at least 2 (times and positions)")
+    data = table.values()
 
-    ncol = len(header)
-    data = np.empty((len(rows), ncol), dtype=np.float64)
-    for i, (lineno, cells) in enumerate(rows):
-        if len(cells) != ncol:
+    def take(cols):
+        return None if cols is None else _frozen(data[:, cols])
+
+    return Motion(
+        t=_frozen(data[:, table.columns["t"]]),
+        positions={pid: take(pos_cols[pid]) for pid in ids},
+        velocities={pid: take(vel_cols[pid]) for pid in ids},
+        path=table.path,
+        body_poses={bid: take(pose_cols[bid]) for bid in bids},
+        body_rates={bid: take(rate_cols[bid]) for bid in bids},
+    )
+
+
+def _columns(table: Table, kind: _Kind, ids: list[int]):
+    """Column indices of each object's position and (optional) rate columns, and
+    the lower-cased names of all the columns used."""
+    columns, where = table.columns, f"{table.path}:{table.header_line}"
+    pos_cols: dict[int, list[int]] = {}
+    rate_cols: dict[int, list[int] | None] = {}
+    wanted: list[str] = []
+    missing: list[str] = []
+    for i in ids:
+        names = [f"{kind.prefix}{i}_{c}" for c in kind.coords]
+        lacking = [n for n in names if n.lower() not in columns]
+        missing.extend(lacking)
+        if not lacking:
+            pos_cols[i] = [columns[n.lower()] for n in names]
+        wanted.extend(names)
+        rnames = [f"{kind.prefix}{i}_v{c}" for c in kind.coords]
+        present = [n for n in rnames if n.lower() in columns]
+        if present and len(present) < len(rnames):
+            absent = [n for n in rnames if n.lower() not in columns]
             raise InputError(
-                f"{name}:{lineno}: data row {i + 1} has {len(cells)} cells, expected {ncol} (one per header column)"
+                f"{where}: {kind.noun} {i} has {kind.rate_word} column(s) {', '.join(present)} "
+                f"but not {', '.join(absent)}; give all {kind.count_word} of {', '.join(rnames)} "
+                f"{kind.rate_unit} or none"
             )
-        for j, cell in enumerate(cells):
-            if _NONFINITE_RE.match(cell):
-                raise InputError(
-                    f"{name}:{lineno}: data row {i + 1}, column {header[j]!r} = {cell!r} must be a finite number"
-                )
-            if not _FLOAT_RE.match(cell):
-                raise InputError(f"{name}:{lineno}: data row {i + 1}, column {header[j]!r} = {cell!r} is not a number")
-            value = float(cell)
-            if not math.isfinite(value):
-                raise InputError(
-                    f"{name}:{lineno}: data row {i + 1}, column {header[j]!r} = {cell!r} must be a finite number"
-                )
-            data[i, j] = value
-
-    t = data[:, columns["t"]]
-    steps = np.diff(t)
-    bad = np.flatnonzero(~(steps > 0))
-    if bad.size:
-        k = int(bad[0])
-        raise InputError(
-            f"{name}:{rows[k + 1][0]}: data row {k + 2}, column 't' = {rows[k + 1][1][columns['t']]} s is not greater than "
-            f"the previous time {rows[k][1][columns['t']]} s (line {rows[k][0]}); times must be strictly increasing"
-        )
-
-    positions = {pid: _frozen(data[:, pos_cols[pid]]) for pid in ids}
-    velocities = {pid: (None if vel_cols[pid] is None else _frozen(data[:, vel_cols[pid]])) for pid in ids}
-    body_poses = {bid: _frozen(data[:, pose_cols[bid]]) for bid in bids}
-    body_rates = {bid: (None if rate_cols[bid] is None else _frozen(data[:, rate_cols[bid]])) for bid in bids}
-    return Motion(t=_frozen(t), positions=positions, velocities=velocities, path=name,
-                  body_poses=body_poses, body_rates=body_rates)
+        rate_cols[i] = [columns[n.lower()] for n in rnames] if present else None
+        wanted.extend(present)
+    if missing:
+        note = kind.missing_note.format(ids=", ".join(str(i) for i in ids))
+        raise InputError(f"{where}: missing column(s) {', '.join(missing)}{note}; found columns: {table.found}")
+    return pos_cols, rate_cols, [w.lower() for w in wanted]

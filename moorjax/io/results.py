@@ -22,6 +22,8 @@ import os
 
 import numpy as np
 
+from .table import read_table
+
 SUFFIXES = (".nc", ".csv")
 
 
@@ -97,9 +99,7 @@ def read_results(path):
     if path.lower().endswith(".nc"):
         with xr.open_dataset(path) as ds:
             return ds.load()
-    from ..identify.experiment import read_target
-
-    cols = read_target(path)
+    cols = read_table(path, "t,L<id>_tension_b,...").by_column()
     ids = []
     for name in cols:
         if name.startswith("L") and name.endswith("_tension_b"):

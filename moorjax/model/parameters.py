@@ -152,16 +152,19 @@ def valid_names() -> str:
     return ", ".join(f"{k} [{p.unit}]" for k, p in PARAMETERS.items())
 
 
-def _split(name: str):
-    """'L2.Cd' -> ('2', 'Cd'); 'Cd' -> (None, 'Cd')."""
+def split_name(name: str):
+    """A parameter name's line label and base name: 'L2.Cd' -> ('2', 'Cd'); 'Cd' -> (None, 'Cd')."""
     if "." in name and name.startswith("L"):
         label, base = name[1:].split(".", 1)
         return label, base
     return None, name
 
 
+_split = split_name  # the older, private spelling (moorjax.identify.fit, .free)
+
+
 def check_name(name: str, scene=None) -> None:
-    label, base = _split(name)
+    label, base = split_name(name)
     if base not in PARAMETERS:
         raise ValueError(
             f"unknown parameter {name!r}; valid names (optionally prefixed L<id>. for one "
@@ -180,7 +183,7 @@ def check_name(name: str, scene=None) -> None:
 def get_parameter(scene, name: str):
     """The value of parameter ``name`` (for a line-wide name, that of the first line)."""
     check_name(name, scene)
-    label, base = _split(name)
+    label, base = split_name(name)
     p = PARAMETERS[base]
     if p.scope == "env":
         leaf = p.where(scene.env)
@@ -197,7 +200,7 @@ def set_parameter(scene, name: str, value):
     ``value`` may be a traced array (for gradients); concrete values are checked.
     """
     check_name(name, scene)
-    label, base = _split(name)
+    label, base = split_name(name)
     p = PARAMETERS[base]
     if not isinstance(value, jax.core.Tracer):
         v = float(value)

@@ -26,6 +26,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
+from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
 from ..model.ends import FixedEnd
@@ -327,8 +328,8 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
         tensions=tensions,
         force_a=fa,
         force_b=fb,
-        tension_a=jnp.linalg.norm(fa),
-        tension_b=jnp.linalg.norm(fb),
+        tension_a=safe_norm(fa),
+        tension_b=safe_norm(fb),
         grounded_length=_grounded_length(line, env, r),
         converged=converged,
         iterations=damped_steps + sol.stats["num_steps"],
