@@ -54,6 +54,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import moorjax as mj  # noqa: E402
 from moorjax.examples import example_path  # noqa: E402
 from moorjax.identify import experiment, simulation  # noqa: E402
+from moorjax.dynamics import adjoint as adjoint_mod  # noqa: E402
 from moorjax.identify import response as response_mod  # noqa: E402
 from moorjax.identify.response import structured_implicit_gradients  # noqa: E402
 from moorjax.identify.objective import _misfit, model_tensions, tangent  # noqa: E402
@@ -134,12 +135,12 @@ def run_case(n, duration, dt, repeats, with_binomial, with_dense):
     variants = {"forward": Variant(_forward, (exp, sim)),
                 "gradient": Variant(_gradient, (exp, sim))}
     if with_binomial:
-        old = response_mod.CHECKPOINT_BYTES
-        response_mod.CHECKPOINT_BYTES = 0  # force diffrax's default O(√steps) schedule
+        old = adjoint_mod.CHECKPOINT_BYTES
+        adjoint_mod.CHECKPOINT_BYTES = 0  # force diffrax's default O(√steps) schedule
         try:
             variants["binomial"] = Variant(_gradient, (exp, sim))
         finally:
-            response_mod.CHECKPOINT_BYTES = old
+            adjoint_mod.CHECKPOINT_BYTES = old
     variants["jvp"] = Variant(_jvp, (exp, sim.with_adjoint("forward"), tangent(scene, "Cd_normal")))
     if with_dense:
         variants["dense_ift"] = Variant(_gradient, (exp, sim), structured=False)

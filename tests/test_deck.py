@@ -436,12 +436,12 @@ def test_unknown_option_warns_and_is_kept(tmp_path):
     assert len([r for r in record if "unknown option" in str(r.message)]) == 2
 
 
-def test_ei_positive_warns(tmp_path):
+def test_ei_positive_is_read_without_warning(tmp_path):
+    """Bending stiffness is modelled now (see tests/test_bending.py): read, no warning."""
     deck_path = _mutate(tmp_path, {T: GOOD_TYPE.replace("6236000.0  0.0", "6236000.0  1.5e4")})
-    with pytest.warns(InputWarning, match="bending stiffness is not supported"):
-        deck = read_deck(deck_path)
+    deck = read_deck(deck_path)
     assert deck.line_types["main"].ei == 1.5e4
-    assert len(deck.warnings) == 1 and f"case.dat:{T}:" in deck.warnings[0]
+    assert not any("bending" in w for w in deck.warnings)
 
 
 def test_outputs_section_warns(tmp_path):

@@ -22,6 +22,7 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 
+from .._numerics import safe_norm
 from ..model.line import LineState
 
 
@@ -131,8 +132,8 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
     out = dict(
         force_a=fa,
         force_b=fb,
-        tension_a=jnp.linalg.norm(fa, axis=-1),
-        tension_b=jnp.linalg.norm(fb, axis=-1),
+        tension_a=safe_norm(fa, axis=-1),
+        tension_b=safe_norm(fb, axis=-1),
     )
     if scene.bodies:
         out["body_pose"] = jnp.stack(poses)

@@ -24,6 +24,7 @@ import jax
 import numpy as np
 
 from . import batch as _batch
+from ..dynamics.integrate import result_codes
 from .run import simulate_ensemble, status
 
 SUMMARY_STATS = ("max", "mean", "std")
@@ -129,7 +130,7 @@ def run_chunked(
         arrays = {f"stat_{k2}": v for k2, v in summarise(res).items()}
         arrays.update(
             member=idx,
-            result=np.asarray(res.result._value),
+            result=result_codes(res.result),
             status=status(res).astype(str),
             num_steps=np.asarray(res.num_steps),
             num_rejected_steps=np.asarray(res.num_rejected_steps),

@@ -154,9 +154,7 @@ def _parse_line_type(ctx: Context, row: Row) -> DeckLineType:
     ei_tok = t[5]
     if not (is_number(ei_tok) or NONFINITE_RE.match(ei_tok)) and _resolve_side_file(ctx, ei_tok).is_file():
         raise ctx.error(row.lineno, f"{what}: EI = {ei_tok!r}: tabulated bending stiffness is not supported yet")
-    ei = number(ctx, row, 5, what, "EI", "N-m^2", "nonneg")
-    if ei > 0:
-        ctx.warn(row.lineno, f"{what}: EI = {ei_tok} N-m^2: bending stiffness is not supported yet (ignored)")
+    ei = number(ctx, row, 5, what, "EI", "N-m^2", "nonneg")  # > 0: bending (io/build.py)
 
     cd = number(ctx, row, 6, what, "Cd", "[-]", "nonneg")
     ca = number(ctx, row, 7, what, "Ca", "[-]", "nonneg")

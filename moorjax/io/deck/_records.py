@@ -29,7 +29,7 @@ class DeckLineType:
         ba: internal axial damping [N·s] if >= 0; if negative it is ``-zeta``,
             the damping as a fraction of critical (MoorDyn convention), kept as
             given.
-        ei: bending stiffness [N·m²] (not simulated yet; > 0 gives a warning).
+        ei: bending stiffness [N·m²] (> 0: bending stiffness of the line, see LineType.ei).
         cd: transverse drag coefficient [-], w.r.t. frontal area d·l.
         ca: transverse added-mass coefficient [-].
         cd_axial: tangential drag coefficient [-], w.r.t. surface area π·d·l.
