@@ -1,5 +1,6 @@
 """What every ``moorjax`` sub-command module shares: help layout, message
-clipping and the ``example:NAME`` deck argument.
+clipping, the ``example:NAME`` deck argument, and the argument types and
+options (dynamics settings) of several sub-commands.
 
 Kept apart from :mod:`moorjax.cli` so that sub-command modules
 (:mod:`moorjax.identify.cli`, ...) need not import the command line that
@@ -41,3 +42,46 @@ def deck_path(arg: str) -> str:
 
         return example_path(arg.split(":", 1)[1])
     return arg
+
+
+def positive_int(text):
+    """argparse type: an integer >= 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {clip(repr(text))}")
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {v}")
+    return v
+
+
+def add_subcommand(sub, name, help, example, **kw):
+    """A sub-command parser with its one-line help, defaults and one example."""
+    return sub.add_parser(name, help=help, description=help[0].upper() + help[1:] + ".",
+                          epilog=f"example:\n  {example}", formatter_class=HelpFormatter, **kw)
+
+
+def dynamics_options(d):
+    """Options shared by simulate and ensemble."""
+    from .dynamics.solvers import SOLVERS
+
+    d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
+    d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
+    d.add_argument("--t0", type=float, default=0.0, help="start time [s] (static equilibrium there)")
+    d.add_argument("--motion", help="CSV of coupled-point and coupled-body motion "
+                   "(t, P<id>_x, ..., B<id>_x, ..., B<id>_roll [rad], ...); 'none' holds "
+                   "them still (default: an example's own motion, else none)")
+    d.add_argument("--segments", type=positive_int,
+                   help="override every line's segment count (default: the deck's)")
+    d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
+    d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
+    d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")
+    d.add_argument(
+        "--atol-velocity",
+        type=float,
+        help="absolute tolerance of velocities [m/s] (default 100*atol per s)",
+    )
+    d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
+    d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
+    d.add_argument("--quiet", "-q", action="store_true",
+                   help="no progress on stderr (it is off anyway when stderr is not a terminal)")

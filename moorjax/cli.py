@@ -19,7 +19,8 @@ import warnings
 import numpy as np
 
 from . import __version__
-from ._cli_common import HelpFormatter, clip, deck_path
+from ._cli_common import HelpFormatter, add_subcommand, clip, dynamics_options, positive_int
+from ._cli_load import command_line, deck_text, load, load_for_dynamics, motion_path
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 
@@ -46,43 +47,12 @@ class ArgumentParser(argparse.ArgumentParser):
 # ------------------------------------------------------------------ loading
 
 
-def _motion_path(args) -> str | None:
-    """--motion, or a bundled example's own motion; ``none`` holds the coupled points."""
-    motion = getattr(args, "motion", None)
-    if motion is not None:
-        return None if motion.lower() == "none" else motion
-    if args.deck.startswith("example:"):
-        from .examples import example_motion_path
-
-        return example_motion_path(args.deck.split(":", 1)[1])
-    return None
-
-
-def _element(args):
-    """The line discretisation named by ``--element`` (None: the default, linear)."""
-    from .element import HermiteElement, LinearElement
-
-    name = getattr(args, "element", "linear")
-    return {"linear": LinearElement(), "hermite": HermiteElement()}[name]
-
-
-def _load(args, motion_path=None):
-    from .io import build_scene, read_deck, read_deck_motion
-
-    deck = read_deck(deck_path(args.deck))
-    motion = None
-    if motion_path is not None:
-        motion = read_deck_motion(motion_path, deck)
-    scene = build_scene(deck, segments=args.segments, motion=motion, element=_element(args))
-    return deck, scene, motion
-
-
 def cmd_statics(args) -> int:
     import jax
 
     from .statics import solve_line_statics
 
-    _, scene, _ = _load(args)
+    _, scene, _ = load(args)
     if scene.bodies and args.element == "hermite":
         from .io.errors import InputError
 
@@ -141,44 +111,6 @@ def cmd_statics(args) -> int:
     return 0
 
 
-def _settings(args) -> dict:
-    return dict(solver=args.solver, rtol=args.rtol, atol=args.atol,
-                atol_velocity=args.atol_velocity, dt=args.dt, dt_out=args.dt_out)
-
-
-def _load_for_dynamics(args, with_motion=False):
-    """Deck, scene and simulate() keyword arguments from the shared options
-    (and the motion read, with ``with_motion``). Every option is checked here,
-    before anything is compiled."""
-    from .dynamics.simulate import plan
-
-    if not (np.isfinite(args.duration) and args.duration > 0):
-        raise ValueError(f"--duration = {args.duration} s must be > 0")
-    if not np.isfinite(args.t0):
-        raise ValueError(f"--t0 = {args.t0} s must be finite")
-    kwargs = _settings(args)
-    motion_path = _motion_path(args)
-    deck, scene, motion = _load(args, motion_path)
-    if motion is not None:
-        _check_motion_covers(motion_path, motion.t, args.t0, args.t0 + args.duration)
-    plan(args.duration, t0=args.t0, **kwargs)  # raises ValueError naming a bad setting
-    kwargs["t0"] = args.t0
-    return (deck, scene, kwargs, motion) if with_motion else (deck, scene, kwargs)
-
-
-def _check_motion_covers(path, t, t0, t_end):
-    """The motion must cover the run, t0 to t_end [s]: a ValueError naming the
-    file and both time spans otherwise (no point is ever held still)."""
-    tol = 1e-9 * max(1.0, abs(t_end))
-    if t[0] > t0 + tol or t[-1] < t_end - tol:
-        raise ValueError(
-            f"{path}: the motion covers t = {t[0]:.10g} to {t[-1]:.10g} s but the run needs "
-            f"t = {t0:.10g} to {t_end:.10g} s (--t0, --duration); give the motion over at least "
-            "that span (to hold a point still, add rows at its last position with zero "
-            "velocity) or shorten --duration"
-        )
-
-
 class _CompileTimer:
     """Seconds JAX spends tracing, lowering and compiling while active, from its
     monitoring events, so --stats needs no second run. Nested jits report
@@ -227,7 +159,7 @@ def cmd_simulate(args) -> int:
     from .io.results import check_output, write_results
 
     check_output(args.out)
-    deck, scene, kwargs, motion = _load_for_dynamics(args, with_motion=True)
+    deck, scene, kwargs, motion = load_for_dynamics(args, with_motion=True)
     prog = Progress("simulate", enabled(args.quiet))
     prog.say(f"{len(scene.lines)} line(s), {sum(ln.n_segments for ln in scene.lines)} segments, "
              f"{args.duration:g} s; compiling (tens of seconds the first time)…")
@@ -243,8 +175,8 @@ def cmd_simulate(args) -> int:
     settings = dict(kwargs, duration=args.duration, segments=args.segments,
                     save_nodes=not args.no_nodes)
     ds = to_dataset(res, scene, deck=deck, motion=motion, attrs=dict(
-        deck=args.deck, deck_text=_deck_text(args.deck), motion=_motion_path(args) or "none",
-        settings=settings, history=_command_line(args),
+        deck=args.deck, deck_text=deck_text(args.deck), motion=motion_path(args) or "none",
+        settings=settings, history=command_line(args),
     ))
     for msg in check_run(ds):
         warnings.warn(msg)
@@ -263,15 +195,6 @@ def cmd_simulate(args) -> int:
     return 0
 
 
-def _deck_text(deck_arg) -> str:
-    with open(deck_path(deck_arg), encoding="utf-8", errors="replace") as f:
-        return f.read()
-
-
-def _command_line(args) -> str:
-    return "moorjax " + " ".join(getattr(args, "argv", []) or [args.command])
-
-
 def cmd_examples(args) -> int:
     from .examples import EXAMPLES, example
 
@@ -281,21 +204,6 @@ def cmd_examples(args) -> int:
     return 0
 
 
-def _positive_int(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {clip(repr(text))}")
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {v}")
-    return v
-
-
-def _sub(sub, name, help, example, **kw):
-    return sub.add_parser(name, help=help, description=help[0].upper() + help[1:] + ".",
-                          epilog=f"example:\n  {example}", formatter_class=HelpFormatter, **kw)
-
-
 def build_parser() -> argparse.ArgumentParser:
     p = ArgumentParser(prog="moorjax", description=DESCRIPTION, epilog=EPILOG,
                        formatter_class=HelpFormatter)
@@ -303,10 +211,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND",
                            parser_class=ArgumentParser)
 
-    s = _sub(sub, "statics", "static equilibrium of every line of a deck",
+    s = add_subcommand(sub, "statics", "static equilibrium of every line of a deck",
              "moorjax statics example:oc3_catenary --json")
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
-    s.add_argument("--segments", type=_positive_int,
+    s.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
     s.add_argument("--element", choices=("linear", "hermite"), default="linear",
                    help="line discretisation: Aamo & Fossen's linear element, or Wu et al.'s "
@@ -314,9 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
     s.set_defaults(func=cmd_statics)
 
-    d = _sub(sub, "simulate", "time-domain simulation of a deck",
+    d = add_subcommand(sub, "simulate", "time-domain simulation of a deck",
              "moorjax simulate example:oc3_catenary --duration 60 --segments 40 --out run.nc")
-    _dynamics_options(d)
+    dynamics_options(d)
     d.add_argument("--out", required=True,
                    help="output file: .nc (netCDF: tensions, forces, node positions, segment "
                         "tensions, units) or .csv (tensions and forces)")
@@ -339,36 +247,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_plot_parsers(sub)
 
-    e = _sub(sub, "examples", "list the bundled examples (deck, motion, what each shows)",
+    e = add_subcommand(sub, "examples", "list the bundled examples (deck, motion, what each shows)",
              "moorjax examples")
     e.set_defaults(func=cmd_examples)
     return p
-
-
-def _dynamics_options(d):
-    """Options shared by simulate and ensemble."""
-    from .dynamics.solvers import SOLVERS
-
-    d.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
-    d.add_argument("--duration", type=float, required=True, help="simulated time [s]")
-    d.add_argument("--t0", type=float, default=0.0, help="start time [s] (static equilibrium there)")
-    d.add_argument("--motion", help="CSV of coupled-point and coupled-body motion "
-                   "(t, P<id>_x, ..., B<id>_x, ..., B<id>_roll [rad], ...); 'none' holds "
-                   "them still (default: an example's own motion, else none)")
-    d.add_argument("--segments", type=_positive_int,
-                   help="override every line's segment count (default: the deck's)")
-    d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
-    d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
-    d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")
-    d.add_argument(
-        "--atol-velocity",
-        type=float,
-        help="absolute tolerance of velocities [m/s] (default 100*atol per s)",
-    )
-    d.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
-    d.add_argument("--dt-out", type=float, default=0.05, help="output interval [s]")
-    d.add_argument("--quiet", "-q", action="store_true",
-                   help="no progress on stderr (it is off anyway when stderr is not a terminal)")
 
 
 # ------------------------------------------------------------------ running

@@ -8,17 +8,16 @@ import time
 
 import numpy as np
 
-from ..cli import _dynamics_options, _load_for_dynamics, _motion_path, _command_line
+from .._cli_common import add_subcommand, dynamics_options, positive_int
+from .._cli_load import command_line, load_for_dynamics, motion_path
 
 
 def add_parser(subparsers):
     """Add the ``ensemble`` sub-command to an ``argparse`` sub-parser collection."""
-    from ..cli import _positive_int, _sub
-
-    en = _sub(subparsers, "ensemble", "parameter sweep of a deck as one vmapped ensemble",
+    en = add_subcommand(subparsers, "ensemble", "parameter sweep of a deck as one vmapped ensemble",
               "moorjax ensemble example:taut_polyester --duration 20 --segments 20 "
               "--vary Cd=1.2,1.6,2.0 --out sweep")
-    _dynamics_options(en)
+    dynamics_options(en)
     en.add_argument(
         "--vary", action="append", required=True, metavar="NAME=v1,v2,...",
         help="parameter values (repeatable; members are all combinations). Names: "
@@ -28,7 +27,7 @@ def add_parser(subparsers):
     en.add_argument("--out", required=True,
                     help="output directory (resumed if it exists): summary.csv, ensemble.nc")
     en.add_argument("--histories", action="store_true", help="also write each member's tension history")
-    en.add_argument("--chunk-size", type=_positive_int, default=100, help="members per compiled batch")
+    en.add_argument("--chunk-size", type=positive_int, default=100, help="members per compiled batch")
     en.set_defaults(func=cmd_ensemble)
     return en
 
@@ -46,7 +45,7 @@ def cmd_ensemble(args) -> int:
     parent = os.path.dirname(os.path.abspath(args.out))
     if not os.path.isdir(parent):
         raise ValueError(f"--out {args.out}: folder {parent} does not exist")
-    _, scene, kwargs = _load_for_dynamics(args)
+    _, scene, kwargs = load_for_dynamics(args)
     members, table = sweep(scene, varies)
     prog = Progress("ensemble", enabled(args.quiet))
     n_chunks = -(-len(members) // min(args.chunk_size, len(members)))
@@ -91,9 +90,9 @@ def cmd_ensemble(args) -> int:
     from ..io.ensemble import ensemble_dataset
 
     ds = ensemble_dataset(data, table, names, ids, attrs=dict(
-        deck=args.deck, motion=_motion_path(args) or "none",
+        deck=args.deck, motion=motion_path(args) or "none",
         settings=dict(kwargs, duration=args.duration, segments=args.segments),
-        history=_command_line(args)))
+        history=command_line(args)))
     from ..io.results import write_netcdf
 
     write_netcdf(ds, os.path.join(args.out, "ensemble.nc"))

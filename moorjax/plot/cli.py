@@ -7,7 +7,7 @@ import sys
 
 
 def add_parsers(subparsers):
-    from ..cli import HelpFormatter, _positive_int
+    from .._cli_common import HelpFormatter, positive_int
 
     p = subparsers.add_parser(
         "plot", help="plot a run: tension histories and line profiles (with the seabed)",
@@ -23,7 +23,7 @@ def add_parsers(subparsers):
     p.add_argument("--line", help="line id of the profiles (default: the first line)")
     p.add_argument("--animate", metavar="OUT.gif|OUT.mp4",
                    help="also write an animation of the line profile (mp4 needs ffmpeg)")
-    p.add_argument("--fps", type=_positive_int, default=20, help="animation frames per second")
+    p.add_argument("--fps", type=positive_int, default=20, help="animation frames per second")
     p.set_defaults(func=cmd_plot)
 
     s = subparsers.add_parser(
@@ -33,7 +33,7 @@ def add_parsers(subparsers):
         epilog="example:\n  moorjax plot-statics example:oc3_catenary --out layout.png",
     )
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
-    s.add_argument("--segments", type=_positive_int,
+    s.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
     s.add_argument("--out", required=True, help="figure file (.png, .pdf, .svg)")
     s.set_defaults(func=cmd_plot_statics)
@@ -89,14 +89,14 @@ def cmd_plot(args) -> int:
 def cmd_plot_statics(args) -> int:
     import jax
 
-    from ..cli import _load
+    from .._cli_load import load
     from ..statics import solve_line_statics
     from ._layout import plot_statics
     from ._mpl import pyplot
 
     _figure_path(args.out)
     pyplot(headless=True)
-    _, scene, _ = _load(args)
+    _, scene, _ = load(args)
     sols = []
     for line in scene.lines:
         st = jax.device_get(solve_line_statics(line, scene.env, throw=False))
