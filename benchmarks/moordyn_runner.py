@@ -54,7 +54,11 @@ DEFAULT_HOLD_S = 2.0
 
 #: where the project's reference data lives when it is available (optional;
 #: override with the MOORJAX_REFERENCE_DIR environment variable).
-REFERENCE_DIR = Path(os.environ.get("MOORJAX_REFERENCE_DIR", "/work/shared/reference"))
+#: the reference folder: $MOORJAX_REFERENCE_DIR, else ../shared/reference beside the
+#: repository root (as every benchmark's --reference default)
+REFERENCE_DIR = Path(os.environ.get(
+    "MOORJAX_REFERENCE_DIR",
+    Path(__file__).resolve().parents[1].parent / "shared" / "reference"))
 
 
 # --------------------------------------------------------------------------
