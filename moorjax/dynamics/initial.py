@@ -59,7 +59,7 @@ def check_geometry(scene, t0=0.0):
         zero = [jnp.zeros(6)] * len(scene.bodies)
         lines = attach(scene.lines, scene.bodies, zero, zero)
     for line in lines:
-        fem._check_geometry(line, scene.env, t0)
+        fem.check_geometry(line, scene.env, t0)
 
 
 def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,

@@ -37,7 +37,7 @@ import numpy as np
 import optax
 
 from ..dynamics.integrate import first_bad_time
-from ..model.parameters import PARAMETERS, _split, get_parameter
+from ..model.parameters import PARAMETERS, get_parameter, split_name
 from .covariance import gauss_newton_covariance
 from .experiment import Experiment
 from .free import as_free, make_transform
@@ -96,7 +96,7 @@ class FitResult:
         """A JSON-ready summary (the ``moorjax fit`` output)."""
         params = {}
         for i, n in enumerate(self.names):
-            base = PARAMETERS[_split(n)[1]]
+            base = PARAMETERS[split_name(n)[1]]
             params[n] = dict(
                 initial=self.initial[n], fitted=self.values[n], unit=base.unit,
                 std=None if self.std is None else self.std[n],

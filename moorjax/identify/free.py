@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.parameters import PARAMETERS, _split, check_name, get_parameter
+from ..model.parameters import PARAMETERS, check_name, get_parameter, split_name
 
 
 @dataclass(frozen=True)
@@ -120,7 +120,7 @@ def make_transform(free: tuple[Free, ...], scene) -> tuple[Transform, np.ndarray
     kinds, lows, highs, scales, offsets, u0 = [], [], [], [], [], []
     for f in free:
         check_name(f.name, scene)
-        base = PARAMETERS[_split(f.name)[1]]
+        base = PARAMETERS[split_name(f.name)[1]]
         current = float(get_parameter(scene, f.name))  # raises if the term is absent
         start = current if f.start is None else float(f.start)
         lo = f.lower if f.lower is not None else (None if base.signed else 0.0)

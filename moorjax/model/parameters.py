@@ -160,7 +160,6 @@ def split_name(name: str):
     return None, name
 
 
-_split = split_name  # the older, private spelling (moorjax.identify.fit, .free)
 
 
 def check_name(name: str, scene=None) -> None:

@@ -207,7 +207,7 @@ def _grounded_length(line, env, r):
 MAX_STRAIN = 0.5
 
 
-def _check_geometry(line, env, t):
+def check_geometry(line, env, t):
     """Python-level checks on concrete end positions (skipped under tracing)."""
     try:
         ra = np.asarray(line.end_a.position(t), dtype=float)
@@ -261,7 +261,7 @@ def solve_line_statics(
         throw: raise ``RuntimeError`` if Newton fails (otherwise inspect
             ``converged``).
     """
-    _check_geometry(line, env, t)
+    check_geometry(line, env, t)
     from ..element.hermite import HermiteElement
 
     if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field

@@ -24,7 +24,7 @@ import numpy as np
 from jaxtyping import Array
 
 from ..body.coupling import attach, mooring_wrenches
-from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _check_geometry, _solve_core
+from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, check_geometry, _solve_core
 
 
 class SystemStatics(eqx.Module):
@@ -117,7 +117,7 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
     nb = len(scene.bodies)
     poses = jnp.zeros((nb, 6)) if init is None else jnp.asarray(init, float).reshape(nb, 6)
     for line in attach(scene.lines, scene.bodies, list(poses), [jnp.zeros(6)] * nb):
-        _check_geometry(line, scene.env, t)  # names a line that cannot reach its ends
+        check_geometry(line, scene.env, t)  # names a line that cannot reach its ends
     t = jnp.asarray(t, dtype=float)
     scale = None
     converged = False
