@@ -12,10 +12,13 @@ import jax.numpy as jnp
 
 
 def safe_norm(x, axis=-1, keepdims=False):
-    """Euclidean norm whose gradient is 0 (not NaN) at ``x = 0``."""
+    """Euclidean norm whose gradient is 0 (not NaN) at ``x = 0``.
+
+    A NaN in ``x`` gives NaN (``sq·0``), never 0: a diverged state must stay
+    visible to the failure checks that look for non-finite tensions."""
     sq = jnp.sum(x * x, axis=axis, keepdims=keepdims)
     positive = sq > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), 0.0)
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, sq, 1.0)), sq * 0.0)
 
 
 def safe_unit(x, axis=-1):

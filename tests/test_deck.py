@@ -487,8 +487,7 @@ def test_unattached_point_warns(tmp_path):
 
 
 def test_all_warnings_carry_file_and_line(tmp_path):
-    deck_path = _mutate(tmp_path, {T: GOOD_TYPE.replace("6236000.0  0.0", "6236000.0  1.5e4"),
-                                   33: ["0 writeLog", "7 unknownThing"]})  # fmt: skip
+    deck_path = _mutate(tmp_path, {33: ["0 writeLog", "7 unknownThing", "8 otherThing"]})
     with pytest.warns(InputWarning):
         deck = read_deck(deck_path)
     assert len(deck.warnings) == 2

@@ -40,3 +40,11 @@ def test_static_end_tension_and_its_gradient_at_a_zero_end_force():
     # the magnitude the statics report, differentiated at the reported force
     grad = jax.grad(lambda f: safe_norm(f))(st.force_a)
     np.testing.assert_array_equal(grad, 0.0)
+
+
+def test_norm_of_a_nan_is_nan_not_zero():
+    """A diverged state must not read as a slack line (tension 0): failure checks
+    look for non-finite tensions."""
+    assert np.isnan(float(safe_norm(jnp.array([jnp.nan, 0.0, 1.0]))))
+    assert np.isinf(float(safe_norm(jnp.array([jnp.inf, 0.0, 1.0]))))
+    assert float(safe_norm(jnp.zeros(3))) == 0.0
