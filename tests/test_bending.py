@@ -69,6 +69,7 @@ def test_deck_ei_is_read():
     assert not line.banded_jacobian  # bending couples second neighbours
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ei", [1e7, 1e6])
 def test_simply_supported_beam_against_beam_theory(ei):
     """Bending-dominated (EI = 1e7, the deck's) and mixed bending–membrane (1e6,
@@ -124,6 +125,7 @@ def test_no_ei_leaves_the_line_unchanged():
                                   zero.element.nodal_forces(zero, env, r, v))
 
 
+@pytest.mark.slow
 def test_gradient_of_sag_wrt_ei_matches_finite_differences():
     """Implicit-function gradients through the dense static solve."""
     line, env = deck_beam(16)
@@ -141,6 +143,7 @@ def test_gradient_of_sag_wrt_ei_matches_finite_differences():
     assert g < 0 and abs(g / fd - 1) < 1e-5, (g, fd)
 
 
+@pytest.mark.slow
 def test_beam_held_from_statics_stays_in_equilibrium_in_dynamics():
     """A line with EI in the dynamics driver (dense Newton: bending couples second
     neighbours): started from its static state with the ends held, it stays there."""

@@ -19,6 +19,8 @@ from moorjax.dynamics import simulate
 from moorjax.statics import (mooring_stiffness, offset_curve, solve_system_statics,
                              system_stiffness)
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 RHO, G = 1025.0, 9.80665
 LB, DRAFT, ZG = 45.0, 20.0, -6.25
 VOL = LB * LB * DRAFT

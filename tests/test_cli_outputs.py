@@ -96,6 +96,7 @@ def test_examples_listing_says_what_each_shows():
         assert f"example:{name}" in out and ex.shows in out and ex.motion in out
 
 
+@pytest.mark.slow
 def test_example_moves_by_default(example_run):
     """Without --motion the example runs with its surge: the fairlead moves along x
     as the file says, and the tension varies by far more than a held line's."""

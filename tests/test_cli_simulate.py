@@ -119,6 +119,7 @@ def test_stats_line(held_run):
     assert np.isfinite(stats["compile_s"]) and stats["run_s"] > 0
 
 
+@pytest.mark.slow
 def test_motion_file_drives_the_fairlead(tmp_path, capsys, statics_row):
     """With --motion (columns t, P2_x, P2_y, P2_z; velocities optional and left out
     here: the spline slopes then come from the positions), point 2 follows the

@@ -8,11 +8,14 @@ there (nodal mass, no added mass): statics and dynamics must agree.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import moorjax as mj
 from moorjax.body import ConnectionPoint
 from moorjax.dynamics import simulate
 from moorjax.statics import solve_line_statics, solve_system_statics
+
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
 
 LT = mj.LineType(0.08, 30.0, 2.0e8, drag=mj.MorisonDrag(1.2, 0.2))  # no added mass
 ENV = mj.Environment(200.0, seabed=None)

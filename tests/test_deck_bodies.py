@@ -426,6 +426,7 @@ def _statics(path):
     return json.loads(out.getvalue())
 
 
+@pytest.mark.slow
 def test_statics_fixed_and_coupled_body_equal_plain_points():
     plain = _statics(FIXED_POINTS)
     for path in (FIXED, COUPLED):
@@ -450,6 +451,7 @@ def _simulate(deck, motion, out):
     return header, np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
 
 
+@pytest.mark.slow
 def test_simulate_coupled_body_equals_coupled_points(tmp_path):
     """``simulate --motion`` with B1_x..B1_yaw (and rates) runs the same as the deck
     with coupled points 4-6 driven along the independently computed rigid paths;

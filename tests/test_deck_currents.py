@@ -145,6 +145,7 @@ def scene():
     return build_scene(read_deck(STEADY))
 
 
+@pytest.mark.slow
 def test_statics_under_current_match_moordyn_settled_state(scene):
     st = solve_line_statics(scene.lines[0], scene.env)
     ref = REF["settled"]["lines"][0]
@@ -164,6 +165,7 @@ def test_still_water_statics_match_moordyn_initial_condition(scene):
     assert err < 0.1, err  # MoorDyn's IC solver stops at its own threshold (0.1 %)
 
 
+@pytest.mark.slow
 def test_transient_into_the_current_matches_moordyn(scene):
     """From the still-water equilibrium the line swings into the current."""
     init = (solve_line_statics(scene.lines[0], _still(scene).env).state(),)

@@ -106,6 +106,7 @@ def test_moorpy_case2_free_point_statics_match_moorpy():
         np.testing.assert_allclose(float(s.tension_a), line.TA, rtol=1e-3)  # anchor end on the seabed
 
 
+@pytest.mark.slow
 def test_free_point_in_dynamic_current_matches_moordyn():
     ref = json.loads((DYN.parent / "moordyn_ref.json").read_text())
     scene = build_scene(read_deck(DYN))

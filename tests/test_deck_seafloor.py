@@ -100,6 +100,7 @@ def test_tilted_plane_contact_is_normal_to_the_seabed():
     np.testing.assert_allclose(tangential, np.outer(np.full(5, -0.5 * expected), along), rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_line_resting_on_a_sloped_seabed_matches_moorpy_inclined_catenary():
     """Statics on a seabed rising 0.1 m per m along the line: MoorPy's catenary
     with a seabed incline alpha = atan(0.1) (stiff bed, kBot = 3e8 Pa/m)."""

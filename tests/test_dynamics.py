@@ -18,6 +18,7 @@ from scenes import case_b_scene
 DATA = os.path.join(os.path.dirname(__file__), "data")
 
 
+@pytest.mark.slow
 def test_band_jacobian_equals_dense_jacobian():
     """The coloured-JVP band reproduces the full Jacobian of the vector field."""
     scene = case_b_scene(12)
@@ -42,6 +43,7 @@ def test_jacobian_finite_at_rest_and_zero_length_segment():
     assert np.all(np.isfinite(jac))
 
 
+@pytest.mark.slow
 def test_case_b_against_moordyn_reference():
     """Slack–snap case B: 8 s of fairlead tension within 2 % (RMS/std) at N = 20."""
     scene = case_b_scene(20)
@@ -58,6 +60,7 @@ def test_case_b_against_moordyn_reference():
     assert np.max(np.asarray(res.tension_b)) > 1.5e6  # the snap loads are there
 
 
+@pytest.mark.slow
 def test_held_line_stays_in_equilibrium():
     """Started from statics with the ends held, nothing moves (consistency of the two)."""
     scene = case_b_scene(10, end_b=mj.FixedEnd([0, 0, -5.0]))
@@ -91,6 +94,7 @@ def test_failure_is_reported_with_time():
     assert not np.all(np.isfinite(np.asarray(res.tension_b)))
 
 
+@pytest.mark.slow
 def test_newton_iterations_are_counted():
     """count_newton: ESDIRK stages need at least 2 very-chord iterations each."""
     scene = case_b_scene(6)

@@ -115,6 +115,7 @@ def run(mass, solver, tol, damping=0.0):
      (ConsistentMass(), "dopri8", 1e-10)],
     ids=["nodal-kvaerno5", "nodal-dopri8", "consistent-dopri8"],
 )
+@pytest.mark.slow
 def test_energy_is_conserved_without_dissipation(mass, solver, tol):
     """|E(t) − E(0)| < 1e-6 of the vibration energy over 100 periods.
 

@@ -21,6 +21,8 @@ from moorjax.ensemble.run import TRACES
 from moorjax.ensemble.store import load, run_chunked
 from scenes import case_b_line_type, case_b_scene
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 # tight tolerances: members differ from single runs only by roundoff-driven Newton
 # termination decisions, whose effect is of the order of the Newton tolerance
 SETTINGS = dict(solver="kvaerno3", rtol=1e-10, atol=1e-10, dt_out=0.1)

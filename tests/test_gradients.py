@@ -29,6 +29,8 @@ from moorjax.io.motion import Motion
 from moorjax.model.parameters import get_parameter
 from scenes import case_b_scene, polyester_scene
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 DATA = os.path.join(os.path.dirname(__file__), "data")
 
 # ---------------------------------------------------------------- shared cases

@@ -14,6 +14,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from moorjax.dynamics.hermite_newmark import newmark_hermite
 from moorjax.element import HermiteElement
@@ -42,6 +43,7 @@ def test_static_state_is_a_fixed_point():
     assert np.ptp(tb) < 1e-7 * tb.mean()
 
 
+@pytest.mark.slow
 def test_case_a_first_surge_against_moordyn():
     """The first 2.5 s (fairlead pulled out from 0.91 to 1.8 MN): 10 Hermite elements
     follow MoorDyn's 160 segments to 2 % of the tension range (measured RMS 1.4 %

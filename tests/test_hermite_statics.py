@@ -30,6 +30,8 @@ from moorjax.statics.fem import solve_line_statics
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bending import deck_beam, tie_beam  # noqa: E402
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 DATA = Path(__file__).parent / "data"
 SOLVE = eqx.filter_jit(lambda line, env: solve_line_statics(line, env, throw=False))
 

@@ -24,6 +24,8 @@ from moorjax.identify.objective import misfit_and_gradient
 from moorjax.io.motion import Motion
 from scenes import POLY_TRUE, polyester_scene
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 DATA = os.path.join(os.path.dirname(__file__), "data")
 DT = 0.01
 

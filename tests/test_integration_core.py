@@ -21,6 +21,8 @@ from moorjax.dynamics import adjoint, equilibrium_state
 from moorjax.ensemble import equilibrium as ensemble_equilibrium
 from moorjax.statics import solve_line_statics
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 ROOT = pathlib.Path(mj.__file__).parent
 
 

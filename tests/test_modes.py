@@ -142,6 +142,7 @@ def test_taut_line_transverse_and_axial_modes(mass):
     np.testing.assert_allclose(f_ax[:3], fa_exact * dispersion, rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_plucked_taut_line_period():
     """Release the line from its first transverse mode shape: the period of a node's
     transverse motion is the analytic 1/f_1 within 0.5 %.

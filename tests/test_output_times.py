@@ -134,6 +134,7 @@ def test_default_output_times_start_at_t0_and_end_at_the_duration():
         plan(ts=[0.2, 0.5], t0=0.3)
 
 
+@pytest.mark.slow
 def test_first_sample_is_the_static_state_at_t0(ends_on_last_sample, base):
     """The path starts from rest, so the sample at t0 = 0 is the static solution."""
     res = ends_on_last_sample
@@ -146,6 +147,7 @@ def test_first_sample_is_the_static_state_at_t0(ends_on_last_sample, base):
     assert float(res.tension_b[-1, 0]) > 1.5 * float(st.tension_b)
 
 
+@pytest.mark.slow
 def test_run_ending_on_the_last_motion_sample_equals_a_longer_motion(ends_on_last_sample,
                                                                      longer_motion):
     """Every sample, the last ones included, agrees with a run whose motion goes on
@@ -191,6 +193,7 @@ def test_motion_not_covering_the_run_is_refused(base, times, t0, expect):
     assert "line 1 end B" in msg and expect in msg and "must cover the whole run" in msg, msg
 
 
+@pytest.mark.slow
 def test_cli_motion_ending_at_the_duration(tmp_path, base):
     """``moorjax simulate`` with a motion file ending exactly at --duration: no
     warning; the CSV starts with the static state at t = 0 and equals the API."""

@@ -10,6 +10,8 @@ import re
 import shlex
 from pathlib import Path
 
+import pytest
+
 from moorjax.cli import main
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -21,6 +23,7 @@ def quick_start_blocks():
     return re.findall(r"```(bash|python)\n(.*?)```", section, flags=re.S)
 
 
+@pytest.mark.slow
 def test_quick_start_runs(tmp_path, monkeypatch):
     blocks = quick_start_blocks()
     assert [k for k, _ in blocks] == ["bash", "python", "python"]

@@ -23,11 +23,14 @@ import os
 
 import equinox as eqx
 import numpy as np
+import pytest
 
 import moorjax as mj
 from moorjax.dynamics import simulate
 from moorjax.examples import example_path
 from moorjax.io import build_scene, read_deck, read_motion
+
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
 
 DATA = os.path.join(os.path.dirname(__file__), "data")
 

@@ -142,6 +142,7 @@ def susp80():
 # ------------------------------------------------------------ accuracy
 
 
+@pytest.mark.slow
 def test_converges_to_analytic_catenary_at_second_order(susp80):
     line80, env, st80 = susp80
     ra, rb = ends(line80)
@@ -344,6 +345,7 @@ def _fd(f, x0, h):
     return (f(x0 + h) - f(x0 - h)) / (2 * h)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["hang", "A"])
 def test_tension_gradients_match_finite_differences(case, solved, name):
     """Suspended ("hang") and partly grounded (A) lines."""
@@ -385,6 +387,7 @@ def test_tension_gradients_match_finite_differences(case, solved, name):
         assert gb @ u == pytest.approx(fd, rel=1e-5), (u, gb @ u, fd)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["hang", "A"])
 def test_fairlead_stiffness_matches_finite_differences(case, solved, name):
     """Suspended and partly grounded lines (both on case A's structure: one compilation)."""

@@ -26,6 +26,8 @@ from moorpy.Catenary import catenary as moorpy_catenary
 import moorjax as mj
 from moorjax.statics.fem import solve_line_statics
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 G, RHO = 9.80665, 1025.0
 N_DRAWS = 200
 SEED = 20261130

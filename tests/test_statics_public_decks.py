@@ -17,6 +17,8 @@ from moorpy.Catenary import catenary as moorpy_catenary
 from moorjax.io import build_scene, read_deck
 from moorjax.statics.fem import solve_line_statics
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 PUBLIC = Path(__file__).parent / "data" / "public"
 SOLVE = eqx.filter_jit(lambda line, env: solve_line_statics(line, env, throw=False))
 

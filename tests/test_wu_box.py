@@ -10,6 +10,8 @@ import pytest
 from moorjax.examples import wu_box as wu
 from moorjax.statics import offset_curve, solve_line_statics
 
+pytestmark = pytest.mark.slow  # long physics/compile checks: CI runs them, `-m "not slow"` skips
+
 
 def _axial_stiffness_at(law, tension):
     """Secant AE = T/ε at the strain where the law gives ``tension`` (bisection)."""
