@@ -155,3 +155,9 @@ def test_beam_held_from_statics_stays_in_equilibrium_in_dynamics():
     tb = np.asarray(res.tension_b[:, 0])
     assert bool(res.succeeded())
     assert np.ptp(tb) < 1e-6 * tb.mean(), tb
+
+
+def test_negative_or_nonfinite_ei_is_refused():
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="bending stiffness EI"):
+            mj.LineType(0.1, 20.0, 1e8, ei=bad)
