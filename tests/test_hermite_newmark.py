@@ -44,17 +44,21 @@ def test_static_state_is_a_fixed_point():
 
 
 @pytest.mark.slow
-def test_case_a_first_surge_against_moordyn():
-    """The first 2.5 s (fairlead pulled out from 0.91 to 1.8 MN): 10 Hermite elements
-    follow MoorDyn's 160 segments to 2 % of the tension range (measured RMS 1.4 %
-    of the 0.48 MN range, 0.4 % of the mean)."""
+def test_case_a_first_period_against_moordyn():
+    """The first period (0–10 s: pulled out to 1.8 MN, then the trough where the
+    lower line goes slack): 10 Hermite elements follow MoorDyn's 160 segments
+    to 1.5 % of the std of the reference force; the trough is within 5 % of
+    MoorDyn's (measured 94.0 kN, MoorDyn 94.6 kN; a bilateral tension field, which pushes in compression,
+    fell to 12 kN there)."""
     line, env = case_a(10)
     dofs = EQUILIBRIUM(line, env)
-    out = newmark_hermite(line, env, dofs, 0.0, 0.01, 250)
+    out = newmark_hermite(line, env, dofs, 0.0, 0.01, 1000)
     ref = np.loadtxt(DATA / "ref_A.csv", delimiter=",", skiprows=1)
-    ref = ref[ref[:, 0] <= 2.5]
+    ref = ref[ref[:, 0] <= 10.0]
     force = np.linalg.norm(ref[:, 3:6], axis=1)
     model = np.interp(ref[:, 0], np.asarray(out.t), np.asarray(out.tension_b))
     rms = np.sqrt(np.mean((model - force) ** 2))
-    assert rms < 0.02 * np.ptp(force), (rms, np.ptp(force))
-    assert abs(model.max() / force.max() - 1) < 0.01
+    assert rms < 0.015 * np.std(force), (rms, np.std(force))
+    assert abs(model.max() / force.max() - 1) < 0.005
+    trough = (ref[:, 0] > 4.5) & (ref[:, 0] < 7.0)
+    assert abs(model[trough].min() / force[trough].min() - 1) < 0.05, (model[trough].min(), force[trough].min())

@@ -8,15 +8,16 @@ nodes follow their end conditions; their slopes are free. The Jacobian is dense
 (forward-mode AD), fine for the ~10 elements this solver is meant for; it is a
 check on the element and on diffrax runs, not the production driver.
 
-Measured on the reference case A (10 elements, dt = 0.01 s, 60 s, against
-MoorDyn at 160 segments): peaks within 0.4 % (1.948 vs 1.940 MN), RMS/std of the
-fairlead force 9.7 %, driven by the troughs: the tension falls to 12 kN where
-MoorDyn's stays at 89 kN. That is not the stepping: at dt = 0.005 s Newton
-converges in every step but one (at dt = 0.01 s it stalls at a scaled residual
-of 0.1 in three steps near t = 4–6 s) and the trough is the same 12 kN; the
-coarse cubic over the moving touchdown and the bilateral tension field (no
-slack) are the suspects, not yet measured. The
-first surge (0–2.5 s) is within 1.4 % RMS of the tension range.
+Measured on the reference case A (10 elements, 60 s, against MoorDyn at 160
+segments; fairlead force = the line's generalised force on the end node minus
+its consistent inertia): RMS/std of the fairlead force 1.25 % at dt = 0.01 s
+(1.06 % over the first 20 s, the same at dt = 0.005 s), peaks within 0.1 %.
+It was 9.7 % while the element's tension field was bilateral: in the troughs
+the lower line carried up to −170 kN of compression and the fairlead tension
+fell to 12 kN where MoorDyn stays at 115 kN; the slack regularisation of
+:mod:`moorjax.element.hermite` removed that. Newton (6 iterations) leaves a
+scaled residual of up to 0.15 in a few steps where the tension field crosses
+zero (the regularised law's kink); the histories do not change at dt = 0.005 s.
 """
 
 from __future__ import annotations
@@ -32,15 +33,18 @@ from ..element.hermite import HermiteDofs, extensibility, generalized_forces, in
 
 class NewmarkResult(eqx.Module):
     """Histories at the step times: ``t`` (m,) [s], ``force_a``/``force_b`` (m, 3) [N]
-    (the line's force on its end points, end nodes' inertia excluded, as MoorDyn
-    reports), ``tension_b`` (m,) [N], ``newton_residual`` (m,) (largest scaled
-    residual after the step's Newton iterations)."""
+    (the line's force on its end points: the generalised force on the end node
+    minus the consistent inertia of its shape function, which tends to the end
+    tension as the elements shrink, as MoorDyn's end-node force does),
+    ``tension_b`` (m,) [N], ``newton_residual`` (m,) (largest scaled residual
+    after the step's Newton iterations), ``lam`` (m, 2n+1) the tension field [N]."""
 
     t: jax.Array
     force_a: jax.Array
     force_b: jax.Array
     tension_b: jax.Array
     newton_residual: jax.Array
+    lam: jax.Array
 
 
 def _pack(line, t, y):
@@ -64,7 +68,7 @@ def newmark_hermite(line, env, init: HermiteDofs, t0, dt, n_steps: int, newton_i
         vel = jax.tree.map(lambda v0, a0, a: v0 + 0.5 * dt * (a0 + a), v_n, a_n, acc)
         f, m = generalized_forces(line, env, dofs, HermiteDofs(vel[0], vel[1], dofs.lam), t)
         fi, mi = inertia_forces(line, env, dofs, HermiteDofs(acc[0], acc[1], dofs.lam))
-        return ((fi - f)[1:-1] / k, (mi - m) / (k * h), extensibility(line, dofs)), acc, vel, (f, m)
+        return ((fi - f)[1:-1] / k, (mi - m) / (k * h), extensibility(line, dofs)), acc, vel, (f - fi, m)
 
     flat = lambda tree: jnp.concatenate([x.reshape(-1) for x in jax.tree.leaves(tree)])  # noqa: E731
     y_shapes = ((n - 1, 3), (n + 1, 3), (2 * n + 1,))
@@ -90,7 +94,7 @@ def newmark_hermite(line, env, init: HermiteDofs, t0, dt, n_steps: int, newton_i
         y_new = unflat(yv)
         res, acc, vel, (f, _) = residual(y_new, prev, t)
         dofs = _pack(line, t, y_new)
-        out = (f[0], f[-1], jnp.max(jnp.abs(flat(res))))
+        out = (f[0], f[-1], jnp.max(jnp.abs(flat(res))), y_new[2])
         return (y_new, ((dofs.r, dofs.dr), vel, acc)), out
 
     # start: the static state, free nodes at rest, ends moving with their paths
@@ -99,7 +103,7 @@ def newmark_hermite(line, env, init: HermiteDofs, t0, dt, n_steps: int, newton_i
           jnp.zeros_like(init.dr))
     a0 = (jnp.zeros_like(init.r), jnp.zeros_like(init.dr))
     y0 = (init.r[1:-1], init.dr, init.lam)
-    _, (fa, fb, res) = lax.scan(step, (y0, (u0, v0, a0)), jnp.arange(n_steps))
+    _, (fa, fb, res, lam) = lax.scan(step, (y0, (u0, v0, a0)), jnp.arange(n_steps))
     ts = t0 + dt * jnp.arange(1, n_steps + 1)
     return NewmarkResult(t=ts, force_a=fa, force_b=fb, tension_b=jnp.linalg.norm(fb, axis=-1),
-                         newton_residual=res)
+                         newton_residual=res, lam=lam)
