@@ -61,6 +61,14 @@ def add_subcommand(sub, name, help, example, **kw):
                           epilog=f"example:\n  {example}", formatter_class=HelpFormatter, **kw)
 
 
+def element_option(d):
+    """``--element linear|hermite`` (statics, simulate, ensemble, fit)."""
+    d.add_argument("--element", choices=("linear", "hermite"), default="linear",
+                   help="line discretisation: Aamo & Fossen's linear element (default), or Wu "
+                        "et al.'s Hermite-cubic element with a tension field (single lines "
+                        "between fixed or moving points; no bodies, free points, 3-D seabed)")
+
+
 def dynamics_options(d):
     """Options shared by simulate and ensemble."""
     from .dynamics.solvers import SOLVERS
@@ -74,6 +82,7 @@ def dynamics_options(d):
     d.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
     d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
+    element_option(d)
     d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
     d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")
     d.add_argument(

@@ -19,7 +19,8 @@ import warnings
 import numpy as np
 
 from . import __version__
-from ._cli_common import HelpFormatter, add_subcommand, clip, dynamics_options, positive_int
+from ._cli_common import (HelpFormatter, add_subcommand, clip, dynamics_options, element_option,
+                          positive_int)
 from ._cli_load import command_line, deck_text, load, load_for_dynamics, motion_path
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
@@ -216,9 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     s.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
-    s.add_argument("--element", choices=("linear", "hermite"), default="linear",
-                   help="line discretisation: Aamo & Fossen's linear element, or Wu et al.'s "
-                        "mixed Hermite-cubic element (statics only so far)")
+    element_option(s)
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
     s.set_defaults(func=cmd_statics)
 

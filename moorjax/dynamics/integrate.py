@@ -121,7 +121,7 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     if keep_final:
         outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
         cut = lambda a: a[:-1]  # noqa: E731
-        final = unpack(jax.tree_util.tree_map(lambda a: a[-1], ys), len(scene.lines))
+        final = unpack(jax.tree_util.tree_map(lambda a: a[-1], ys), scene.lines)
     else:
         outs = sol.ys
         cut = lambda a: a  # noqa: E731

@@ -26,18 +26,33 @@ from .._numerics import safe_norm
 from ..model.line import LineState
 
 
+def _pack_one(s):
+    from ..element.hermite_motion import HermiteState
+
+    if isinstance(s, LineState):
+        return jnp.concatenate([s.r, s.v], axis=-1)
+    if isinstance(s, HermiteState):
+        return s.packed()
+    return s
+
+
 def pack(states) -> tuple:
-    """States → solver state: each :class:`LineState` to an (n−1, 6) array; body
+    """States → solver state: each :class:`LineState` to an (n−1, 6) array, each
+    :class:`~moorjax.element.hermite_motion.HermiteState` to its (2n, 6) array; body
     states (1-D arrays) pass through."""
-    return tuple(jnp.concatenate([s.r, s.v], axis=-1) if isinstance(s, LineState) else s
-                 for s in states)
+    return tuple(_pack_one(s) for s in states)
 
 
-def unpack(y, n_lines: int) -> tuple:
-    """Solver state → a :class:`LineState` for each of the ``n_lines`` lines, then
-    the body states (1-D arrays) as they are."""
+def unpack(y, lines) -> tuple:
+    """Solver state → each line's state (its element's, see
+    :meth:`~moorjax.element.base.AbstractElement.unpack_state`), then the body
+    states (1-D arrays) as they are. ``lines``: the scene's lines (or their
+    number, for lines of node elements only)."""
     y = tuple(y)
-    return tuple(LineState(r=q[..., :3], v=q[..., 3:]) for q in y[:n_lines]) + y[n_lines:]
+    if isinstance(lines, int):
+        return tuple(LineState(r=q[..., :3], v=q[..., 3:]) for q in y[:lines]) + y[lines:]
+    n = len(lines)
+    return tuple(ln.element.unpack_state(ln, q) for ln, q in zip(lines, y[:n])) + y[n:]
 
 
 def _body_kinematics(y, scene):
@@ -54,9 +69,7 @@ def _body_kinematics(y, scene):
 
 
 def _line_rate(line, q, env, t):
-    r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-    acc = line.element.accelerations(line, env, t, r, v)
-    return jnp.concatenate([q[:, 3:], acc], axis=-1)
+    return line.element.state_rate(line, env, t, q)
 
 
 def _structure_key(line):
@@ -80,6 +93,7 @@ def vector_field(t, y, scene):
     out = _line_rates(t, y_lines, lines, scene.env)
     if not scene.bodies:
         return out
+    check_body_lines(scene)
     from ..body.coupling import mooring_wrenches
 
     ends = [_end_forces(line, q, scene.env, t) for line, q in zip(lines, y_lines)]
@@ -89,9 +103,21 @@ def vector_field(t, y, scene):
     return out + rates
 
 
+def check_body_lines(scene):
+    """Trace-time refusal: Hermite lines are not coupled to bodies (their end
+    force carries the end node's consistent inertia, which a body would have to
+    take into its own mass matrix)."""
+    from ..element.hermite import HermiteElement
+
+    bad = [ln.label for ln in scene.lines if isinstance(ln.element, HermiteElement)]
+    if bad:
+        raise ValueError(f"line(s) {', '.join(bad)}: the Hermite element is not coupled to "
+                         "bodies or free points yet; use the linear element (--element linear) "
+                         "for scenes with bodies")
+
+
 def _end_forces(line, q, env, t):
-    r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-    return line.element.end_forces(line, env, r, v, t)
+    return line.element.state_end_forces(line, env, t, q)
 
 
 def _line_rates(t, y, lines, env):
@@ -121,13 +147,13 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
     fa, fb, pos, ten = [], [], [], []
     y_lines, lines, poses, vels = _body_kinematics(y, scene)
     for line, q in zip(lines, y_lines):
-        r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-        a, b = line.element.end_forces(line, scene.env, r, v, t)
+        a, b = line.element.state_end_forces(line, scene.env, t, q)
         fa.append(a)
         fb.append(b)
         if with_nodes:
+            r, tension = line.element.state_outputs(line, scene.env, t, q)
             pos.append(r)
-            ten.append(line.element.segment_tensions(line, r, v))
+            ten.append(tension)
     fa, fb = jnp.stack(fa), jnp.stack(fb)
     out = dict(
         force_a=fa,

@@ -11,6 +11,7 @@ from __future__ import annotations
 import abc
 
 import equinox as eqx
+import jax.numpy as jnp
 
 
 class AbstractElement(eqx.Module):
@@ -44,3 +45,36 @@ class AbstractElement(eqx.Module):
     @abc.abstractmethod
     def end_forces(self, line, env, r, v, t=0.0):
         """Forces (3,), (3,) [N] that the line exerts on its end A and end B points."""
+
+    # -- the dynamics driver's view: a line's packed solver state q (rows, 6) ----
+    # Node elements pack their free nodes' [position, velocity] (n−1, 6) (a
+    # :class:`~moorjax.model.line.LineState`); an element with more unknowns per
+    # node (slopes) overrides these four and packs them in more rows.
+
+    def state_rate(self, line, env, t, q):
+        """dq/dt (rows, 6) of the packed state q at time t [s]."""
+        from ..model.line import LineState
+
+        r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+        acc = self.accelerations(line, env, t, r, v)
+        return jnp.concatenate([q[:, 3:], acc], axis=-1)
+
+    def state_end_forces(self, line, env, t, q):
+        """Forces (3,), (3,) [N] the line exerts on its end points, from the packed state."""
+        from ..model.line import LineState
+
+        r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+        return self.end_forces(line, env, r, v, t)
+
+    def state_outputs(self, line, env, t, q):
+        """Node positions (n+1, 3) [m] and segment tensions (n,) [N] from the packed state."""
+        from ..model.line import LineState
+
+        r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+        return r, self.segment_tensions(line, r, v)
+
+    def unpack_state(self, line, q):
+        """The packed state q as the element's state pytree (a ``LineState`` here)."""
+        from ..model.line import LineState
+
+        return LineState(r=q[:, :3], v=q[:, 3:])

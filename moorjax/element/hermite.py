@@ -179,14 +179,20 @@ def _to_dofs(line, f, g, b):
     return force, moment
 
 
-def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = None, t=0.0):
+def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = None, t=0.0,
+                       tension=None):
     """All non-inertial generalised forces (n+1, 3) on the node positions [N] and
     (n+1, 3) on the slopes [N·m]: tension λ/(1 + ε)·r' and internal damping
     BA·dε/dt along the tangent, bending, and the distributed loads. ``vel`` holds
-    the node velocities and slope rates (``lam`` unused); ``None`` is at rest."""
+    the node velocities and slope rates (``lam`` unused); ``None`` is at rest.
+    ``tension``: (λ [N], ε [-]) at the quadrature points (n, Q) in place of the
+    field ``dofs.lam`` and its strain."""
     lt = line.line_type
     r, d1, d2, lam = element_fields(line, dofs)
-    eps = strain_of_tension(lt.axial, lam, line.element.slack_ratio)
+    if tension is None:
+        eps = strain_of_tension(lt.axial, lam, line.element.slack_ratio)
+    else:
+        lam, eps = tension
     g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
     v = None
     if vel is not None:
@@ -248,44 +254,84 @@ def static_residual(line, env, dofs: HermiteDofs, t=0.0):
 
 
 class HermiteElement(AbstractElement):
-    """Wu et al.'s mixed Hermite-cubic element (statics; see the module docstring).
+    """Wu et al.'s mixed Hermite-cubic element (see the module docstring).
 
     Its unknowns are not node positions alone (:class:`HermiteDofs`), so its
-    statics has its own solve (:func:`moorjax.statics.hermite.solve_hermite_statics`,
-    called by :func:`moorjax.statics.fem.solve_line_statics`). The node-position
-    interface of the dynamics driver is not available for it yet.
+    statics has its own solve (:func:`moorjax.statics.hermite.hermite_statics_core`,
+    called by :func:`moorjax.statics.fem.solve_line_statics`) and its dynamic
+    state carries the slopes (:class:`~moorjax.element.hermite_motion.HermiteState`,
+    see :mod:`moorjax.element.hermite_motion`): the dynamics driver uses its
+    ``state_*`` methods; the node-only methods of the linear element raise.
 
     Args:
         slack_ratio: compression stiffness of a unilateral line as a fraction of
             its EA [-] (the slack regularisation of the module notes; 1e-4).
+        tension: how the tension follows from the slopes in the dynamics
+            (:class:`~moorjax.element.hermite_motion.MixedTension`, Wu's field
+            eliminated per evaluation, the default; or ``StrainTension``).
     """
 
     slack_ratio: float = 1e-4
+    tension: "AbstractTension" = None  # noqa: F821
 
-    def __check_init__(self):
-        c = self.slack_ratio
-        if isinstance(c, (int, float)) and not (0.0 < c <= 1.0):
-            raise ValueError(f"HermiteElement: slack_ratio = {c} must be in (0, 1] (compression "
-                             "stiffness over EA; 1e-4 is the default)")
+    def __init__(self, slack_ratio=1e-4, tension=None):
+        from .hermite_motion import MixedTension
+
+        if isinstance(slack_ratio, (int, float)) and not (0.0 < slack_ratio <= 1.0):
+            raise ValueError(f"HermiteElement: slack_ratio = {slack_ratio} must be in (0, 1] "
+                             "(compression stiffness over EA; 1e-4 is the default)")
+        self.slack_ratio = slack_ratio
+        self.tension = MixedTension() if tension is None else tension
 
     @property
     def banded_jacobian(self) -> bool:
         return False
 
-    def _no_dynamics(self):
+    # -- the dynamics driver's packed state ------------------------------------
+    def state_rate(self, line, env, t, q):
+        from .hermite_motion import state_rate
+
+        _check_supported(line, env)
+        return state_rate(line, env, t, q)
+
+    def state_end_forces(self, line, env, t, q):
+        from .hermite_motion import end_forces
+
+        return end_forces(line, env, t, q)
+
+    def state_outputs(self, line, env, t, q):
+        from .hermite_motion import outputs
+
+        return outputs(line, env, t, q)
+
+    def unpack_state(self, line, q):
+        from .hermite_motion import unpack_hermite
+
+        return unpack_hermite(line, q)
+
+    # -- node-only interface: not available ------------------------------------
+    def _node_only(self):
         raise NotImplementedError(
-            "HermiteElement: dynamics are not implemented yet (its state carries slopes and a "
-            "tension field); use LinearElement for simulate/fit/ensembles"
+            "HermiteElement: its state carries node slopes, so the node-only methods "
+            "(nodal_forces, accelerations, segment_tensions, end_forces) do not apply; "
+            "the dynamics driver uses state_rate/state_end_forces/state_outputs"
         )
 
     def nodal_forces(self, line, env, r, v, t=0.0):
-        self._no_dynamics()
+        self._node_only()
 
     def accelerations(self, line, env, t, r, v):
-        self._no_dynamics()
+        self._node_only()
 
     def segment_tensions(self, line, r, v):
-        self._no_dynamics()
+        self._node_only()
 
     def end_forces(self, line, env, r, v, t=0.0):
-        self._no_dynamics()
+        self._node_only()
+
+
+def _check_supported(line, env):
+    """Trace-time refusal of what the Hermite dynamics does not model."""
+    if env.seabed is not None and env.seabed.bathymetry is not None:
+        raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported; "
+                         "use --element linear (LinearElement) for lines over a 3-D seabed")

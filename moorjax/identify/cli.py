@@ -20,7 +20,7 @@ import sys
 
 def add_parser(subparsers):
     """Add the ``fit`` sub-command to an ``argparse`` sub-parser collection."""
-    from .._cli_common import HelpFormatter
+    from .._cli_common import HelpFormatter, element_option
     from ..dynamics.solvers import SOLVERS
 
     f = subparsers.add_parser(
@@ -44,6 +44,7 @@ def add_parser(subparsers):
                    help="start value of a free parameter (default: the deck's value); repeatable")
     f.add_argument("--window", metavar="T0,T1", help="only samples with T0 <= t <= T1 [s] count")
     f.add_argument("--segments", type=int, help="override every line's segment count (default: the deck's)")
+    element_option(f)
     f.add_argument("--dt", type=float, default=0.01, help="fixed time step [s] (default 0.01)")
     f.add_argument("--solver", default="kvaerno3", choices=SOLVERS, help="time stepper (default kvaerno3)")
     f.add_argument("--rtol", type=float, default=1e-6, help="Newton relative tolerance (default 1e-6)")
@@ -111,6 +112,7 @@ def cmd_fit(args) -> int:
     import optax
 
     from .._cli_common import deck_path
+    from .._cli_load import element_from
     from .._progress import Progress, enabled
     from ..io.results import check_output
     from .experiment import load_experiment
@@ -127,7 +129,7 @@ def cmd_fit(args) -> int:
     starts = _parse_start(args.start, names, args.line)
     exp = load_experiment(
         deck_path(args.deck), motion, args.target, segments=args.segments,
-        line=args.line, window=_parse_window(args.window),
+        line=args.line, window=_parse_window(args.window), element=element_from(args),
     )
     free = [Free(n, starts.get(n)) for n in names]
     if args.optimizer == "adam":

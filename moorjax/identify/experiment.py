@@ -209,7 +209,7 @@ def target_channels(columns, scene, line=None, path="target") -> list[str]:
 
 
 def load_experiment(deck, motion, target, *, segments=None, line=None, window=None,
-                    name=None) -> Experiment:
+                    name=None, element=None) -> Experiment:
     """An experiment from files: a MoorDyn deck, a motion CSV and a target CSV.
 
     Args:
@@ -220,12 +220,13 @@ def load_experiment(deck, motion, target, *, segments=None, line=None, window=No
         segments: segment count override.
         line: only use (and fit) line ``line``'s channels.
         window: ``(t_start, t_end)`` [s] of the samples that count.
+        element: the lines' discretisation (default: the linear element).
     """
     from ..io import build_scene, coupled_point_ids, read_deck, read_motion
 
     d = read_deck(deck) if isinstance(deck, (str, Path)) else deck
     mot = read_motion(motion, coupled_point_ids(d))
-    scene = build_scene(d, segments=segments, motion=mot)
+    scene = build_scene(d, segments=segments, motion=mot, element=element)
     cols = read_target(target)
     chans = target_channels([c for c in cols if c != "t"], scene, line, str(target))
     t = cols["t"]

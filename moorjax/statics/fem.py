@@ -18,6 +18,8 @@ MoorDyn; the analytic catenary does model it (``moorjax.statics.catenary``).
 
 from __future__ import annotations
 
+from typing import Any
+
 import equinox as eqx
 import jax
 import jax.lax as lax
@@ -45,6 +47,9 @@ class LineStatics(eqx.Module):
         converged: whether Newton met its tolerance.
         iterations: Newton iterations used.
         max_residual: largest free-node force imbalance [N].
+        rest_state: the state at rest of an element whose state is more than node
+            positions (a Hermite line's :class:`~moorjax.element.hermite_motion.HermiteState`,
+            with its slopes), else ``None``.
     """
 
     positions: Array
@@ -57,9 +62,13 @@ class LineStatics(eqx.Module):
     converged: Array
     iterations: Array
     max_residual: Array
+    rest_state: Any = None
 
-    def state(self) -> LineState:
-        """The equilibrium as a dynamic state (free nodes at rest)."""
+    def state(self):
+        """The equilibrium as a dynamic state (free nodes at rest; ``rest_state``
+        where the element has one)."""
+        if self.rest_state is not None:
+            return self.rest_state
         r = self.positions[1:-1]
         return LineState(r=r, v=jnp.zeros_like(r))
 

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .._numerics import safe_norm
+from ..element.hermite_motion import static_state
 from ..element.hermite import WQ, HermiteDofs, element_fields, extensibility, static_residual
 from ..model.line import Line
 
@@ -100,6 +101,7 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
         converged=converged,
         iterations=steps,
         max_residual=res,
+        rest_state=static_state(line, dofs),
     )
 
 

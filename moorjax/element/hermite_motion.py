@@ -1,0 +1,222 @@
+"""Dynamics of a Hermite line: its state, consistent mass and tension closure.
+
+The state of a line of :class:`~moorjax.element.hermite.HermiteElement` s is
+second order in the node positions and slopes; the tension field λ is not a
+state. :class:`HermiteState` packs, for the dynamics driver, the free nodes'
+[r, ṙ] (n−1 rows) and every node's slope scaled by the element length,
+d = h·r' [m], with its rate ḋ [m/s] (n+1 rows): one (2n, 6) array whose
+columns are all metres and metres per second, so the driver's error norm
+weighs slopes like positions.
+
+The accelerations solve the consistent mass matrix M (the Hermite shape
+functions' ∫ H_a μ H_b ds, μ = m·I plus the added mass ρA·|r'|·(Ca_n(I − ttᵀ) +
+Ca_ax ttᵀ); dense, 6(n+1) square) with the prescribed end accelerations on the
+right-hand side.
+
+How the extensibility condition (Wu et al. Eq. 27) enters — the tension closure:
+
+- :class:`MixedTension` (default): Wu's quadratic field λ (2n+1 values)
+  eliminated at every evaluation of the equations of motion, by Newton's method
+  on Eq. 27 for the current slopes from λ = T(|r'| − 1) at the nodes and
+  midpoints. Its derivative with respect to the state is the implicit one (the
+  last Newton step is taken on a stopped-gradient iterate with a frozen
+  Jacobian), so the implicit solvers' Jacobians and ``jax.grad`` see the exact
+  constrained dynamics: the system is an ODE on (U, U̇), no DAE.
+- :class:`StrainTension`: λ = T(|r'| − 1) at every quadrature point, the
+  axial law's unilateral tension directly (a displacement-only Hermite element,
+  no regularisation of the slack law; cheaper, no inner solve).
+"""
+
+from __future__ import annotations
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.lax as lax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array
+
+from .._numerics import safe_norm
+from .hermite import H, WQ, HermiteDofs, element_fields, extensibility, generalized_forces
+
+
+class HermiteState(eqx.Module):
+    """Dynamic state of a Hermite line.
+
+    Attributes:
+        r: (n−1, 3) free node positions [m].
+        v: (n−1, 3) their velocities [m/s].
+        d: (n+1, 3) node slopes times the element length, h·dr/ds [m].
+        dv: (n+1, 3) their rates [m/s].
+    """
+
+    r: Array
+    v: Array
+    d: Array
+    dv: Array
+
+    def packed(self):
+        """The (2n, 6) solver array: [r, v] rows, then [d, dv] rows."""
+        return jnp.concatenate([jnp.concatenate([self.r, self.v], axis=-1),
+                                jnp.concatenate([self.d, self.dv], axis=-1)], axis=0)
+
+
+def unpack_hermite(line, q) -> HermiteState:
+    n = line.n_segments
+    return HermiteState(r=q[:n - 1, :3], v=q[:n - 1, 3:], d=q[n - 1:, :3], dv=q[n - 1:, 3:])
+
+
+# -- tension closures ------------------------------------------------------------
+
+class AbstractTension(eqx.Module):
+    """How a Hermite line's tension follows from its slopes."""
+
+    @abc.abstractmethod
+    def resolve(self, line, dofs: HermiteDofs):
+        """``(dofs with lam set, tension)``: ``tension`` is ``None`` when the field
+        ``dofs.lam`` is used, else (λ [N], ε [-]) at the quadrature points (n, Q)."""
+
+
+class MixedTension(AbstractTension):
+    """Wu's quadratic tension field, eliminated by Newton on Eq. 27 (``iterations``
+    steps from the strain's tension, then one implicit-derivative step)."""
+
+    iterations: int = eqx.field(static=True, default=3)
+
+    def resolve(self, line, dofs):
+        lt = line.line_type
+        n = line.n_segments
+        r0, d0 = lax.stop_gradient(dofs.r), lax.stop_gradient(dofs.dr)
+        # start: the tension of the stretch at the nodes and midpoints
+        half = jnp.stack([d0[:-1], d0[1:]], axis=1)  # (n, 2, 3)
+        h = line.segment_length
+        mid = 1.5 * (r0[1:] - r0[:-1]) / h - 0.25 * (half[:, 0] + half[:, 1])  # r'(½)
+        pts = jnp.zeros((2 * n + 1, 3)).at[0::2].set(d0).at[1::2].set(mid)
+        strain = safe_norm(pts) - 1.0
+        ea = lt.axial.nominal_ea()
+        # the exact inverse of strain_of_tension for a linear EA (slack regularised)
+        lam = jnp.where(strain >= 0.0, lt.axial.tension(strain),
+                        line.element.slack_ratio * ea * strain)
+
+        def g(lam, r, dr):
+            return extensibility(line, HermiteDofs(r=r, dr=dr, lam=lam))
+
+        def newton(_, lam):
+            jac = jax.jacfwd(g)(lam, r0, d0)
+            return lam - jnp.linalg.solve(jac, g(lam, r0, d0))
+
+        lam = lax.fori_loop(0, self.iterations, newton, lam)
+        jac = lax.stop_gradient(jax.jacfwd(g)(lam, r0, d0))
+        lam = lam - jnp.linalg.solve(jac, g(lam, dofs.r, dofs.dr))
+        return HermiteDofs(r=dofs.r, dr=dofs.dr, lam=lam), None
+
+
+class StrainTension(AbstractTension):
+    """λ = T(|r'| − 1) at each quadrature point (the unilateral law itself)."""
+
+    def resolve(self, line, dofs):
+        _, d1, _, _ = element_fields(line, dofs)
+        strain = safe_norm(d1) - 1.0
+        return dofs, (line.line_type.axial.tension(strain), strain)
+
+
+# -- mass, forces, accelerations ----------------------------------------------
+
+def mass_matrix(line, env, dofs: HermiteDofs):
+    """Consistent mass (2n+2, 3, 2n+2, 3) [kg] on the unknowns (r_0, h·r'_0, r_1, …)."""
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    _, d1, _, _ = element_fields(line, dofs)
+    eye = jnp.eye(3)
+    mu = lt.mass_per_length * jnp.broadcast_to(eye, d1.shape[:-1] + (3, 3))
+    if lt.added_mass is not None:
+        stretch = safe_norm(d1)
+        t = d1 / jnp.maximum(stretch, 1e-300)[..., None]
+        tt = t[..., :, None] * t[..., None, :]
+        am = lt.added_mass
+        mu = mu + env.rho * lt.area * stretch[..., None, None] * (
+            am.ca_normal * (eye - tt) + am.ca_axial * tt)
+    me = jnp.einsum("aq,bq,q,nqij->nabij", H, H, WQ * h, mu)
+    idx = 2 * np.arange(n)[:, None] + np.arange(4)[None, :]
+    m = jnp.zeros((2 * n + 2, 2 * n + 2, 3, 3))
+    m = m.at[idx[:, :, None], idx[:, None, :]].add(me)
+    return jnp.transpose(m, (0, 2, 1, 3))
+
+
+def _nodes(line, t, q):
+    """All unknowns (2n+2, 3) interleaved [r_0, d_0, r_1, d_1, …] and their rates."""
+    n = line.n_segments
+    s = unpack_hermite(line, q)
+    r = jnp.concatenate([line.end_a.position(t)[None], s.r, line.end_b.position(t)[None]])
+    v = jnp.concatenate([line.end_a.velocity(t)[None], s.v, line.end_b.velocity(t)[None]])
+    u = jnp.zeros((2 * n + 2, 3)).at[0::2].set(r).at[1::2].set(s.d)
+    ud = jnp.zeros((2 * n + 2, 3)).at[0::2].set(v).at[1::2].set(s.dv)
+    return u, ud
+
+
+def dynamics(line, env, t, q):
+    """Accelerations (2n+2, 3) of all unknowns (interleaved; the ends' are their
+    paths'), the generalised forces (2n+2, 3), the mass matrix and the field."""
+    n, h = line.n_segments, line.segment_length
+    u, ud = _nodes(line, t, q)
+    dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
+    dofs, tension = line.element.tension.resolve(line, dofs)
+    vel = HermiteDofs(r=ud[0::2], dr=ud[1::2] / h, lam=dofs.lam)
+    force, moment = generalized_forces(line, env, dofs, vel, t, tension)
+    f = jnp.zeros((2 * n + 2, 3)).at[0::2].set(force).at[1::2].set(moment / h)
+    m = mass_matrix(line, env, dofs)
+    size = 3 * (2 * n + 2)
+    m2 = m.reshape(size, size)
+    free = np.ones(2 * n + 2, bool)
+    free[[0, 2 * n]] = False
+    fi = np.repeat(np.flatnonzero(free), 3) * 3 + np.tile(np.arange(3), 2 * n)
+    pi = np.concatenate([np.arange(3), 6 * n + np.arange(3)])
+    a_p = jnp.concatenate([line.end_a.acceleration(t), line.end_b.acceleration(t)])
+    rhs = f.reshape(-1)[fi] - m2[np.ix_(fi, pi)] @ a_p
+    a_f = jnp.linalg.solve(m2[np.ix_(fi, fi)], rhs)
+    a = jnp.zeros(size).at[fi].set(a_f).at[pi].set(a_p).reshape(2 * n + 2, 3)
+    return a, f, m2, dofs, tension
+
+
+def state_rate(line, env, t, q):
+    n = line.n_segments
+    a, *_ = dynamics(line, env, t, q)
+    s = unpack_hermite(line, q)
+    acc_r = a[2:2 * n:2]  # free nodes 1..n−1
+    acc_d = a[1::2]
+    return jnp.concatenate([jnp.concatenate([s.v, acc_r], axis=-1),
+                            jnp.concatenate([s.dv, acc_d], axis=-1)], axis=0)
+
+
+def end_forces(line, env, t, q):
+    """Forces (3,), (3,) [N] on the end points: the generalised force on each end
+    node minus its consistent inertia (→ the end tension as elements shrink)."""
+    n = line.n_segments
+    a, f, m2, _, _ = dynamics(line, env, t, q)
+    net = f.reshape(-1) - m2 @ a.reshape(-1)
+    net = net.reshape(2 * n + 2, 3)
+    return net[0], net[2 * n]
+
+
+def outputs(line, env, t, q):
+    """Node positions (n+1, 3) [m] and the effective tension at element midpoints (n,) [N]."""
+    n, h = line.n_segments, line.segment_length
+    u, _ = _nodes(line, t, q)
+    dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
+    dofs, tension = line.element.tension.resolve(line, dofs)
+    if tension is None:
+        return dofs.r, dofs.lam[1::2]
+    # midpoint of the element: the middle Gauss point (ξ = ½ for 5 points)
+    return dofs.r, tension[0][:, 2]
+
+
+def static_state(line, dofs: HermiteDofs) -> HermiteState:
+    """A static solution as a state at rest."""
+    h = line.segment_length
+    r = dofs.r[1:-1]
+    d = h * dofs.dr
+    return HermiteState(r=r, v=jnp.zeros_like(r), d=d, dv=jnp.zeros_like(d))
+
+
