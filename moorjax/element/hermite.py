@@ -241,6 +241,25 @@ def extensibility(line, dofs: HermiteDofs):
     return out.at[0:-1:2].add(ce[:, 0]).at[1::2].add(ce[:, 1]).at[2::2].add(ce[:, 2])
 
 
+def extensibility_jacobian(line, dofs: HermiteDofs):
+    """∂(extensibility)/∂λ (2n+1, 2n+1) [m/N]: ∫ P_m P_k ∂c/∂λ ds, banded (an
+    element couples its three values), assembled from the pointwise derivative."""
+    lt = line.line_type
+    n, h = line.n_segments, line.segment_length
+    _, d1, _, lam = element_fields(line, dofs)
+    s2 = jnp.sum(d1 * d1, axis=-1)
+
+    def c(l):
+        eps = strain_of_tension(lt.axial, l, line.element.slack_ratio)
+        return s2 / (1.0 + eps) - (1.0 + eps)
+
+    _, dc = jax.jvp(c, (lam,), (jnp.ones_like(lam),))  # elementwise in λ
+    ke = jnp.einsum("mq,kq,q,nq->nmk", P, P, WQ * h, dc)  # (n, 3, 3)
+    idx = 2 * np.arange(n)[:, None] + np.arange(3)[None, :]
+    out = jnp.zeros((2 * n + 1, 2 * n + 1))
+    return out.at[idx[:, :, None], idx[:, None, :]].add(ke)
+
+
 def static_residual(line, env, dofs: HermiteDofs, t=0.0):
     """Generalised forces of the line at rest and the extensibility residuals.
 
@@ -266,22 +285,24 @@ class HermiteElement(AbstractElement):
     Args:
         slack_ratio: compression stiffness of a unilateral line as a fraction of
             its EA [-] (the slack regularisation of the module notes; 1e-4).
-        tension: how the tension follows from the slopes in the dynamics
-            (:class:`~moorjax.element.hermite_motion.MixedTension`, Wu's field
-            eliminated per evaluation, the default; or ``StrainTension``).
+        tension: how the tension follows from the slopes in the dynamics:
+            :class:`~moorjax.element.hermite_motion.StrainTension` (the default,
+            the unilateral law at each quadrature point) or ``MixedTension``
+            (Wu's field eliminated per evaluation); see that module for the
+            measurements that chose the default. Statics always solve Wu's field.
     """
 
     slack_ratio: float = 1e-4
     tension: "AbstractTension" = None  # noqa: F821
 
     def __init__(self, slack_ratio=1e-4, tension=None):
-        from .hermite_motion import MixedTension
+        from .hermite_motion import StrainTension
 
         if isinstance(slack_ratio, (int, float)) and not (0.0 < slack_ratio <= 1.0):
             raise ValueError(f"HermiteElement: slack_ratio = {slack_ratio} must be in (0, 1] "
                              "(compression stiffness over EA; 1e-4 is the default)")
         self.slack_ratio = slack_ratio
-        self.tension = MixedTension() if tension is None else tension
+        self.tension = StrainTension() if tension is None else tension
 
     @property
     def banded_jacobian(self) -> bool:

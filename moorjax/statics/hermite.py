@@ -19,8 +19,9 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .._numerics import safe_norm
+from ..element.hermite import (WQ, HermiteDofs, element_fields, extensibility, generalized_forces,
+                               static_residual)
 from ..element.hermite_motion import static_state
-from ..element.hermite import WQ, HermiteDofs, element_fields, extensibility, static_residual
 from ..model.line import Line
 
 
@@ -73,6 +74,37 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
     return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
 
 
+def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10, atol=1e-8,
+                        max_steps=100) -> HermiteDofs:
+    """The equilibrium of the dynamics' tension closure, from Wu's static ``dofs``.
+
+    With :class:`~moorjax.element.hermite_motion.MixedTension` that is ``dofs``
+    itself; with ``StrainTension`` (λ = T(|r'| − 1) pointwise) the positions and
+    slopes move slightly (the two closures differ by their discretisation
+    error), so that a run starts at rest in its own equilibrium.
+    """
+    from ..element.hermite_motion import MixedTension
+
+    closure = line.element.tension
+    if isinstance(closure, MixedTension):
+        return dofs
+    h = line.segment_length
+    k = line.line_type.axial.nominal_ea() / h
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+
+    def fn(y, args):
+        del args
+        full = _assemble(line, ra, rb, (y[0], y[1], dofs.lam))
+        full, tension = closure.resolve(line, full)
+        force, moment = generalized_forces(line, env, full, None, t, tension)
+        return force[1:-1] / k, moment / (k * h)
+
+    y0 = jax.lax.stop_gradient((dofs.r[1:-1], dofs.dr))
+    sol = optx.root_find(fn, optx.Newton(rtol=rtol, atol=atol), y0, max_steps=max_steps,
+                         throw=False)
+    return _assemble(line, ra, rb, (sol.value[0], sol.value[1], dofs.lam))
+
+
 @eqx.filter_jit
 def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
@@ -101,7 +133,7 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
         converged=converged,
         iterations=steps,
         max_residual=res,
-        rest_state=static_state(line, dofs),
+        rest_state=static_state(line, closure_equilibrium(line, env, dofs, t)),
     )
 
 
