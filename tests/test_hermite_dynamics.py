@@ -118,3 +118,25 @@ def test_gradient_and_vmap_of_a_hermite_run():
     assert abs(grad / fd - 1) < 1e-5, (grad, fd)
     cds = jnp.array([1.2, 2.0])
     np.testing.assert_allclose(np.asarray(jax.vmap(f)(cds)), [float(f(c)) for c in cds], rtol=1e-9)
+
+
+def test_cli_simulate_with_hermite_elements(tmp_path):
+    """``moorjax simulate example:taut_polyester --element hermite``: a short run
+    held at rest writes finite tensions equal to the Hermite statics' fairlead
+    tension (the start is the closure's own equilibrium)."""
+    import json
+
+    out = tmp_path / "run.csv"
+    rc = main(["simulate", "example:taut_polyester", "--duration", "0.5", "--segments", "4",
+               "--motion", "none", "--element", "hermite", "--out", str(out), "-q"])
+    assert rc == 0
+    data = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
+    header = out.read_text().splitlines()[0].split(",")
+    tb = data[:, header.index("L1_tension_b")]
+    assert np.all(np.isfinite(tb))
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["statics", "example:taut_polyester", "--segments", "4", "--element",
+                     "hermite", "--json"]) == 0
+    static = json.loads(buf.getvalue())[0]["tension_b"]
+    np.testing.assert_allclose(tb, static, rtol=2e-3)
