@@ -62,6 +62,11 @@ def cmd_statics(args) -> int:
         # free points and bodies move to their equilibrium with the lines
         from .statics.system import solve_system_statics
 
+        if args.method == "catenary":
+            from .io.errors import InputError
+
+            raise InputError("--method catenary: decks with free points or bodies are solved as a "
+                             "system of finite-element lines; use --method auto or fem")
         system = solve_system_statics(scene, throw=False)
         if not system.converged:
             raise RuntimeError(
@@ -236,7 +241,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", choices=("auto", "fem", "catenary"), default="auto",
                    help="auto: the exact elastic catenary where it describes the line (linear "
                         "element, Hooke's law, no EI, no current, flat seabed, a solution "
-                        "exists), else the finite-element equilibrium; fem: always the "
+                        "exists; lines between fixed or moving ends), else the finite-element "
+                        "equilibrium (and always for decks with free points or bodies); fem: always the "
                         "discrete model's equilibrium (the state a simulation starts from); "
                         "catenary: the catenary or an error")
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
