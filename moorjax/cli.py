@@ -240,8 +240,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "mixed Hermite-cubic element (statics only so far)")
     s.add_argument("--method", choices=("auto", "fem", "catenary"), default="auto",
                    help="auto: the exact elastic catenary where it describes the line (linear "
-                        "element, Hooke's law, no EI, no current, flat seabed, a solution "
-                        "exists; lines between fixed or moving ends), else the finite-element "
+                        "element, Hooke's law, negligible EI, no current, flat seabed, a "
+                        "solution exists; lines between fixed or moving ends), else the finite-element "
                         "equilibrium (and always for decks with free points or bodies); fem: always the "
                         "discrete model's equilibrium (the state a simulation starts from); "
                         "catenary: the catenary or an error")

@@ -289,7 +289,7 @@ def test_reported_statics_falls_back_to_the_fem_where_no_catenary_applies():
 
 
 def test_reported_statics_keeps_the_fem_for_what_the_catenary_does_not_model():
-    """A current, bending stiffness or a nonlinear axial law: ``auto`` is the FEM, and
+    """A current: ``auto`` is the FEM, and
     ``method="catenary"`` is refused with a message naming what it needs."""
     c = dict(kind="chain", regime="grounded", d=0.1, m=200.0, ea=8e8, depth=100.0,
              length=400.0, ra=np.array([-350.0, 0.0, -100.0]), rb=np.array([0.0, 0.0, -10.0]))
@@ -303,3 +303,23 @@ def test_reported_statics_keeps_the_fem_for_what_the_catenary_does_not_model():
         solve_line_statics(line, env, method="catenary")
     with pytest.raises(ValueError, match="method must be one of"):
         solve_line_statics(line, env, method="exact")
+
+
+def test_reported_statics_treats_only_a_negligible_bending_stiffness_as_a_cable():
+    """EI = 0.8 N·m² on a chain (MoorDyn decks' placeholder; bending length ~mm) keeps
+    the catenary; a stiff beam (bending length comparable to the line) gets the FEM
+    with bending."""
+    c = dict(kind="chain", regime="grounded", d=0.1, m=200.0, ea=8e8, depth=100.0,
+             length=400.0, ra=np.array([-350.0, 0.0, -100.0]), rb=np.array([0.0, 0.0, -10.0]))
+    c["w"] = (c["m"] - RHO * np.pi * c["d"] ** 2 / 4) * G
+    c["oracle"] = moorpy_oracle(c)
+    line, env = build(c, 20)
+    for ei, exact in ((0.8, True), (5e7, False)):
+        bent = eqx.tree_at(lambda ln: ln.line_type.ei, line, np.float64(ei),
+                           is_leaf=lambda x: x is None)
+        auto, fem = AUTO(bent, env), SOLVE(bent, env)
+        assert bool(auto.converged)
+        if exact:
+            assert _errors(c, auto)[0] < 1e-9
+        else:
+            assert float(auto.tension_b) == float(fem.tension_b)

@@ -1,7 +1,8 @@
 """A line's static equilibrium from the exact elastic catenary, sampled at its nodes.
 
-For a uniform line with Hooke's law (``LinearEA``), no bending stiffness, in still
-water over a flat seabed (or none), the continuum equilibrium is the analytic
+For a uniform line with Hooke's law (``LinearEA``), no bending stiffness (or a
+negligible one: bending length √(EI/H) below 1e-4 of the length), in still water
+over a flat seabed (or none), the continuum equilibrium is the analytic
 elastic catenary (Irvine 1981; :mod:`moorjax.statics.catenary`), with a grounded
 length when the lower end rests on the seabed. Its end tensions are those of the
 line itself, whatever the number of segments, whereas the lumped-mass finite-element
@@ -38,15 +39,21 @@ __all__ = ["catenary_eligible", "catenary_statics", "catenary_solves"]
 def catenary_eligible(line, env) -> bool:
     """Whether the analytic catenary is this line's exact continuum statics (structure only).
 
-    True for the linear element with Hooke's law (tension-only), no bending
-    stiffness, no current, and a flat seabed or none. Values (end positions,
-    whether a catenary solution exists) are judged at run time by
+    True for the linear element with Hooke's law (tension-only), no current, and
+    a flat seabed or none. Values (end positions, whether a catenary solution
+    exists, whether a bending stiffness is negligible) are judged at run time by
     :func:`catenary_statics`.
     """
     lt = line.line_type
     flat = env.seabed is None or env.seabed.bathymetry is None
     return (isinstance(line.element, LinearElement) and type(lt.axial) is LinearEA
-            and lt.ei is None and env.current is None and flat)
+            and env.current is None and flat)
+
+
+#: A bending stiffness EI is negligible when its bending length √(EI/H) is below
+#: this fraction of the line's length (its effect on the end tensions is of that
+#: relative order): e.g. the EI = 0.8 N·m² that MoorDyn decks often carry for chain.
+BENDING_LENGTH_FRACTION = 1e-4
 
 
 def catenary_statics(line, env, t):
@@ -80,6 +87,9 @@ def catenary_statics(line, env, t):
 
     _, _, tension = catenary_profile(sol, jnp.where(swap, length - mid, mid))
     ok = sol.converged & jnp.all(jnp.isfinite(nodes)) & jnp.all(jnp.isfinite(tension))
+    if lt.ei is not None:  # a cable, unless the bending length is negligible
+        bending_length = jnp.sqrt(lt.ei / jnp.maximum(sol.HF, jnp.finfo(float).tiny))
+        ok = ok & (bending_length <= BENDING_LENGTH_FRACTION * length)
     if bed is not None:
         # the free catenary must not pass under the bed (else it would rest on it)
         scale = jnp.maximum(jnp.abs(bed), length)

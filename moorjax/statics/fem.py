@@ -257,8 +257,9 @@ def solve_line_statics(
       than a segment (H/w below a few tens of segment lengths).
     * ``"catenary"``: the exact elastic catenary of the continuous line sampled at
       the nodes (:mod:`moorjax.statics.exact`); only for lines it describes
-      exactly (Hooke's law, no bending stiffness, no current, flat seabed) and
-      geometries where it has a solution, else ``ValueError`` / not converged.
+      exactly (Hooke's law, no current, flat seabed; a bending length √(EI/H)
+      under 1e-4 of the length) and geometries where it has a solution, else
+      ``ValueError`` / not converged.
     * ``"auto"``: ``"catenary"`` where it applies, else ``"fem"`` — the line's
       statics to the solver's precision whatever the segment count; what
       ``moorjax statics`` reports.
@@ -286,8 +287,7 @@ def solve_line_statics(
     if method == "catenary" and not eligible:
         raise ValueError(
             f"line {line.label}: method='catenary' needs a linear element with Hooke's law "
-            "(LinearEA), no bending stiffness, no current and a flat seabed; use method='fem' "
-            "or 'auto'")
+            "(LinearEA), no current and a flat seabed; use method='fem' or 'auto'")
     t = jnp.asarray(t, dtype=float)
     if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field
         from .hermite import hermite_statics_core as core
