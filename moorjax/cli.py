@@ -66,15 +66,15 @@ def cmd_statics(args) -> int:
             from .io.errors import InputError
 
             raise InputError("--method catenary: decks with free points or bodies are solved as a "
-                             "system of finite-element lines; use --method auto or fem")
-        system = solve_system_statics(scene, throw=False)
+                             "system (catenary lines where they apply); use --method auto or fem")
+        system = solve_system_statics(scene, throw=False, method=args.method)
         if not system.converged:
             raise RuntimeError(
                 "system statics (free points and bodies with their lines) did not converge: "
                 f"force imbalance {float(np.max(np.abs(np.asarray(system.residual)))):.3g} N "
                 f"after {system.iterations} Newton iterations")
         statics = system.lines
-        methods = ["fem"] * len(scene.lines)
+        methods = list(system.methods)
     else:
         methods = [_statics_method(line, scene.env, args.method) for line in scene.lines]
         statics = [solve_line_statics(line, scene.env, throw=False, method=m)
@@ -241,8 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--method", choices=("auto", "fem", "catenary"), default="auto",
                    help="auto: the exact elastic catenary where it describes the line (linear "
                         "element, Hooke's law, negligible EI, no current, flat seabed, a "
-                        "solution exists; lines between fixed or moving ends), else the finite-element "
-                        "equilibrium (and always for decks with free points or bodies); fem: always the "
+                        "solution exists), else the finite-element equilibrium; fem: always the "
                         "discrete model's equilibrium (the state a simulation starts from); "
                         "catenary: the catenary or an error")
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
