@@ -30,6 +30,10 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
   ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
   environment's current; line drag acts on the velocity relative to it.
+- Waves (``WaveKin`` 2, 3, 7): the components read from MoorDyn's wave files
+  (:mod:`moorjax.io.waves`) become the environment's :class:`AiryWaves`, summed
+  at the line nodes (drag on the velocity relative to current plus waves, and
+  the water's acceleration); free points do not feel them (a warning says so).
 
 - ``SeafloorFile``: the bathymetry grid becomes the seabed's
   :class:`Bathymetry` (contact along the local seabed normal); the
@@ -48,10 +52,12 @@ import numpy as np
 from ..body.point import ConnectionPoint
 from ..model import (
     AddedMass,
+    AiryWaves,
     Bathymetry,
     BodyEnd,
     Environment,
     FixedEnd,
+    IrregularWave,
     Line,
     LinearEA,
     LineType,
@@ -216,7 +222,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             sf = deck.seafloor
             bathymetry = Bathymetry(sf.x, sf.y, sf.z)
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
-    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
+    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck),
+                      waves=deck_waves(deck, float(opts["WtrDpth"]) or depth, g))
     points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
     return Scene(lines, env, bodies=points)
 
@@ -262,3 +269,17 @@ def deck_current(deck: Deck):
     if cur.mode == 1:
         return ProfileCurrent(cur.z, cur.velocity)
     return TimeProfileCurrent(cur.t, cur.z, cur.velocity)
+
+
+def deck_waves(deck: Deck, depth: float, g: float):
+    """The deck's waves as :class:`AiryWaves` of water depth ``depth`` [m] (MoorDyn
+    takes the wave numbers at ``WtrDpth``) and gravity ``g`` [m/s²], or ``None``."""
+    w = deck.waves
+    if w is None:
+        return None
+    if any(p.attachment == "free" and (p.cda > 0 or p.volume > 0) for p in deck.points.values()):
+        warnings.warn(
+            f"{deck.path}: WaveKin = {w.mode}: the waves load the lines only; free points' drag and "
+            "buoyancy see still water (MoorDyn also applies the wave kinematics at points)",
+            InputWarning, stacklevel=3)
+    return AiryWaves(IrregularWave(w.omega, w.amplitude, w.phase, w.heading), depth, g, w.mean_level)
