@@ -57,6 +57,7 @@ from ..model import (
     BodyEnd,
     Environment,
     FixedEnd,
+    GridAiryWaves,
     IrregularWave,
     Line,
     LinearEA,
@@ -282,4 +283,8 @@ def deck_waves(deck: Deck, depth: float, g: float):
             f"{deck.path}: WaveKin = {w.mode}: the waves load the lines only; free points' drag and "
             "buoyancy see still water (MoorDyn also applies the wave kinematics at points)",
             InputWarning, stacklevel=3)
-    return AiryWaves(IrregularWave(w.omega, w.amplitude, w.phase, w.heading), depth, g, w.mean_level)
+    wave = IrregularWave(w.omega, w.amplitude, w.phase, w.heading)
+    opts = options_with_defaults(deck)
+    # MoorDyn's wave grids carry the current at the stretched height (UnifyCurrentGrid = 1)
+    kind = GridAiryWaves if w.mode in (2, 3) and float(opts["UnifyCurrentGrid"]) == 1 else AiryWaves
+    return kind(wave, depth, g, w.mean_level)

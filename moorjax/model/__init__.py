@@ -27,6 +27,7 @@ from .line_type import LineType as LineType
 from .line_type import MorisonDrag as MorisonDrag
 from .scene import Scene as Scene
 from .waves import AiryWaves as AiryWaves
+from .waves import GridAiryWaves as GridAiryWaves
 from .waves import IrregularWave as IrregularWave
 from .waves import wave_number as wave_number
 
@@ -41,6 +42,7 @@ __all__ = [
     'Bathymetry',
     'BodyEnd',
     'FixedEnd',
+    'GridAiryWaves',
     'IrregularWave',
     'KinematicEnd',
     'Line',

@@ -158,6 +158,18 @@ class AiryWaves(eqx.Module):
         psi, _, _ = self._phase(x, y, t)
         return self.mean_level + jnp.cos(psi) @ self.wave.amplitude
 
+    def stretched_height(self, r, eta) -> Array:
+        """The height z' [m] (…) whose linear kinematics act at the points r (…, 3)
+        under the surface η (…): h(z + h)/(η + h) − h, held at 0 above the surface."""
+        h = self.depth
+        return jnp.minimum(h * (r[..., 2] + h) / (eta + h) - h, 0.0)
+
+    def current_height(self, r, eta) -> Array:
+        """The height [m] at which the current is sampled at the points r (…, 3):
+        their own (MoorDyn's ``WaveKin = 7`` adds the current at the node)."""
+        del eta
+        return r[..., 2]
+
     def kinematics(self, r, t) -> tuple[Array, Array, Array]:
         """Elevation above each point, water velocity and acceleration.
 
@@ -173,7 +185,7 @@ class AiryWaves(eqx.Module):
         cos, sin = jnp.cos(psi), jnp.sin(psi)
         eta = self.mean_level + cos @ amp
         h = self.depth
-        zs = jnp.minimum(h * (r[..., 2] + h) / (eta + h) - h, 0.0)[..., None]  # Wheeler, clipped
+        zs = self.stretched_height(r, eta)[..., None]  # Wheeler, clipped at the surface
         k = self.k
         grow, decay = jnp.exp(k * zs), jnp.exp(-k * (zs + 2.0 * h))
         den = -jnp.expm1(-2.0 * k * h)
@@ -185,3 +197,17 @@ class AiryWaves(eqx.Module):
         u = jnp.stack([uh @ cb, uh @ sb, -jnp.sum(aw * sh * sin, axis=-1)], axis=-1)
         a = jnp.stack([ah @ cb, ah @ sb, -jnp.sum(aww * sh * cos, axis=-1)], axis=-1)
         return eta, u, a
+
+
+class GridAiryWaves(AiryWaves):
+    """:class:`AiryWaves` as MoorDyn v2 applies its wave grids (``WaveKin`` 2, 3).
+
+    The same kinematics; the difference is the current. With
+    ``UnifyCurrentGrid = 1`` (MoorDyn's default) MoorDyn adds the current into the
+    wave grid, which it reads at the stretched height z' (``Waves::setup`` and
+    ``WaveGrid::getWaveKin``), so the current too is taken at z' (and at the
+    surface's value above it) rather than at the node's own height.
+    """
+
+    def current_height(self, r, eta) -> Array:
+        return self.stretched_height(r, eta)
