@@ -149,11 +149,13 @@ class AiryWaves(eqx.Module):
         beta = jnp.broadcast_to(self.wave.heading, self.wave.omega.shape)
         cb, sb = jnp.cos(beta), jnp.sin(beta)
         dist = x[..., None] * cb + y[..., None] * sb
+        t = jnp.asarray(t, dtype=float)[..., None]
         psi = self.wave.omega * t - self.k * dist + self.wave.phase
         return psi, cb, sb
 
     def elevation(self, x, y, t) -> Array:
-        """Surface elevation η [m] at horizontal positions x, y (…) [m], time t [s]."""
+        """Surface elevation η [m] at horizontal positions x, y (…) [m] and times t
+        [s] (any shape broadcasting with x, y)."""
         x, y = jnp.asarray(x, dtype=float), jnp.asarray(y, dtype=float)
         psi, _, _ = self._phase(x, y, t)
         return self.mean_level + jnp.cos(psi) @ self.wave.amplitude

@@ -163,9 +163,9 @@ def _check_wave_mode(ctx: Context, lineno: int, name: str, token: str, value: fl
     expected = ("expected 0 (none), 2 (wave_frequencies.txt on a grid), 3 (wave_elevation.txt on a "
                 "grid) or 7 (wave_frequencies.txt summed at the nodes)")
     if value == 1:
-        raise ctx.error(lineno, f"OPTIONS: {name} = {token}: externally driven waves are set through "
-                        "MoorDyn's API at run time (MoorDyn_ExternalWaveKinSet), which moorjax has not; "
-                        f"give the sea as wave components instead: {expected}")
+        raise ctx.error(lineno, f"OPTIONS: {name} = {token}: externally driven waves (set through "
+                        "MoorDyn's API at run time, MoorDyn_ExternalWaveKinSet) are not supported; give "
+                        f"the sea as wave components instead: {expected}")
     if value in (4, 5, 6):
         raise ctx.error(lineno, f"OPTIONS: {name} = {token}: wave mode {int(value)} is not implemented "
                         f"in MoorDyn v2 either; {expected}")
