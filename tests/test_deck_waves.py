@@ -310,8 +310,8 @@ def test_wavekin_3_fairlead_tension_matches_moordyn(tmp_path):
     """MoorDyn's ``wavekin_3.txt``: a 410 m chain on a soft seabed, both ends fixed
     (the fairlead 2 m under the still surface), a 1 m, 15 s wave given as an
     elevation record (WaveKin 3) and a depth-varying current. From MoorDyn's
-    initial state (TmaxIC = 0), 30 s; the last wave period (15-30 s, after the
-    start-up transient on the seabed) is compared."""
+    initial state (TmaxIC = 0), 45 s; the last wave period (30-45 s, after the
+    start-up transient on the seabed has settled) is compared."""
     moordyn = pytest.importorskip("moordyn")
     from moorjax.dynamics import simulate
 
@@ -328,7 +328,7 @@ def test_wavekin_3_fairlead_tension_matches_moordyn(tmp_path):
         t1 = time.perf_counter()
         ts, ref = [], []
         t, dt = 0.0, 0.05
-        while t < 30.0 - 1e-9:
+        while t < 45.0 - 1e-9:
             moordyn.Step(s, [], [], t, dt)
             t += dt
             ts.append(t)
@@ -348,10 +348,10 @@ def test_wavekin_3_fairlead_tension_matches_moordyn(tmp_path):
     tens = np.asarray(res.segment_tensions[0])[:, -1]
     t_mj = time.perf_counter() - t2
     ref = np.asarray(ref)
-    last = ts > 15.0
+    last = ts > 30.0
     err = np.sqrt(np.mean((tens[last] - ref[last]) ** 2))
     std = np.std(ref[last])
-    print(f"wavekin_3: fairlead tension 15-30 s: RMS error {err:.0f} N, MoorDyn std {std:.0f} N "
+    print(f"wavekin_3: fairlead tension 30-45 s: RMS error {err:.0f} N, MoorDyn std {std:.0f} N "
           f"({err / std:.1%}); MoorDyn {t_md:.2f} s (+{t1 - t0:.2f} s init/grid), moorjax {t_mj:.1f} s "
           "(with compile)")
     # the wave swings the tension by ±7 kN; without waves it would be flat
