@@ -186,6 +186,12 @@ def test_elevation_series_error_is_named(tmp_path):
 def _moordyn_copy(tmp_path, folder, deck):
     dest = tmp_path / folder
     shutil.copytree(PUBLIC / folder, dest)
+    if folder == "wavekin_2":
+        # its waves all travel along +x: one y in the grid (kind 0) builds MoorDyn's
+        # grid 5 times faster and changes nothing (MoorDyn holds y at the nearest)
+        grid = (dest / "water_grid.txt").read_text().splitlines()
+        grid[5:7] = ["0", "0.0"]
+        (dest / "water_grid.txt").write_text("\n".join(grid) + "\n")
     return dest / deck
 
 
@@ -222,6 +228,7 @@ def test_kinematics_match_moordyn(tmp_path, folder, deck, tol):
         moordyn.Close(s)
     finally:
         os.chdir(cwd)
+    print(f"{deck}: largest difference of u [m/s], a [m/s²], η [m] from MoorDyn: {worst:.2e}")
     assert worst < tol, worst
 
 
