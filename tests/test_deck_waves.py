@@ -111,6 +111,12 @@ def test_body_and_line_waves_are_one_model():
     airy = AiryWaves(wave, 100.0)
     t = jnp.linspace(0.0, 50.0, 11)
     np.testing.assert_allclose(airy.elevation(jnp.zeros(11), jnp.zeros(11), t), wave.elevation(t), atol=1e-12)
+    # a body's loads take one heading; a short-crested component set is refused with the reason
+    from moorjax.body.waves import loads_for_wave
+
+    spread = IrregularWave([0.5, 0.6], [1.0, 1.0], [0.0, 0.0], [0.0, 1.0])
+    with pytest.raises(ValueError, match="one wave heading"):
+        loads_for_wave(None, spread)
 
 
 # ----------------------------------------------------------------------------

@@ -158,7 +158,11 @@ class WaveLoads(AbstractBodyLoad):
 
 def loads_for_wave(coeffs: HydroCoefficients, wave: IrregularWave, drift: bool = True) -> WaveLoads:
     """:class:`WaveLoads` of ``wave`` on the body of ``coeffs`` (X and D interpolated
-    linearly in heading and ω; every component must lie within the table)."""
+    linearly in heading and ω; every component must lie within the table). The
+    wave must have one heading (a long-crested sea)."""
+    if jnp.ndim(wave.heading) != 0:
+        raise ValueError(f"body wave loads need one wave heading [rad] for all components (a long-crested "
+                         f"sea); got {jnp.shape(wave.heading)} headings: build one WaveLoads per direction")
     x = excitation_at(coeffs, wave.omega, wave.heading)
     a = wave.amplitude[:, None]
     newman = None
