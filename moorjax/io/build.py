@@ -283,6 +283,16 @@ def deck_waves(deck: Deck, depth: float, g: float):
             f"{deck.path}: WaveKin = {w.mode}: the waves load the lines only; free points' drag and "
             "buoyancy see still water (MoorDyn also applies the wave kinematics at points)",
             InputWarning, stacklevel=3)
+    if w.grid is not None:
+        outside = [pid for pid in deck.points
+                   if any(not (ax[0] - 1e-9 <= c <= ax[-1] + 1e-9)
+                          for ax, c in zip(w.grid, deck.point_position(pid)[:2]) if ax.shape[0] > 1)]
+        if outside:
+            warnings.warn(
+                f"{deck.path}: WaveKin = {w.mode}: points {outside} lie outside the x/y extent of "
+                "water_grid.txt, where MoorDyn holds the kinematics at the grid's edge; moorjax sums the "
+                "wave components at every node, so the two differ there (widen the grid to compare)",
+                InputWarning, stacklevel=3)
     wave = IrregularWave(w.omega, w.amplitude, w.phase, w.heading)
     opts = options_with_defaults(deck)
     # MoorDyn's wave grids carry the current at the stretched height (UnifyCurrentGrid = 1)
