@@ -296,6 +296,26 @@ def test_froude_krylov_load_of_a_nearly_uniform_acceleration():
     assert np.linalg.norm(ref) > 0.1  # [N] on 0.5 m of 0.1 m line
 
 
+def test_free_point_drag_sees_the_wave_velocity():
+    """A free point at rest under a wave: the wave adds the drag ½ρ·CdA·|u_w|u_w
+    (MoorDyn's Point; like MoorDyn, no load from the water's acceleration)."""
+    from moorjax.body.point import ConnectionPoint
+
+    waves = AiryWaves(IrregularWave(0.5, 1.0, 0.3, 0.7), 60.0)
+    point = ConnectionPoint(200.0, [3.0, 1.0, -8.0], volume=0.1, added_mass=50.0, cda=0.8,
+                            current=mj.UniformCurrent([0.2, 0.0, 0.0]))
+    z = point.rest_state()
+    env = mj.Environment(60.0, waves=waves)
+    still = mj.Environment(60.0)
+    t = 2.5
+    extra = (point.rate(t, z, jnp.zeros(6), env) - point.rate(t, z, jnp.zeros(6), still))[6:9] * 250.0
+    _, u_wave, _ = waves.kinematics(point.origin, t)
+    u = u_wave + jnp.array([0.2, 0.0, 0.0])
+    ref = 0.5 * 1025.0 * 0.8 * (jnp.linalg.norm(u) * u - 0.2 * jnp.array([0.2, 0.0, 0.0]))
+    np.testing.assert_allclose(extra, ref, rtol=1e-10)
+    assert float(jnp.linalg.norm(u_wave)) > 0.3
+
+
 def test_statics_solve_the_mean_state_without_waves():
     waves = AiryWaves(IrregularWave([0.5, 0.8], [2.0, 1.0], [0.0, 1.0]), 60.0)
     line, env = _line(waves=waves, current=mj.UniformCurrent([0.5, 0.0, 0.0]))

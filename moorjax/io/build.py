@@ -33,7 +33,8 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Waves (``WaveKin`` 2, 3, 7): the components read from MoorDyn's wave files
   (:mod:`moorjax.io.waves`) become the environment's :class:`AiryWaves`, summed
   at the line nodes (drag on the velocity relative to current plus waves, and
-  the water's acceleration); free points do not feel them (a warning says so).
+  the water's acceleration) and free points (drag, as MoorDyn's Point, which
+  leaves out the water's acceleration).
 
 - ``SeafloorFile``: the bathymetry grid becomes the seabed's
   :class:`Bathymetry` (contact along the local seabed normal); the
@@ -278,11 +279,6 @@ def deck_waves(deck: Deck, depth: float, g: float):
     w = deck.waves
     if w is None:
         return None
-    if any(p.attachment == "free" and (p.cda > 0 or p.volume > 0) for p in deck.points.values()):
-        warnings.warn(
-            f"{deck.path}: WaveKin = {w.mode}: the waves load the lines only; free points' drag and "
-            "buoyancy see still water (MoorDyn also applies the wave kinematics at points)",
-            InputWarning, stacklevel=3)
     if w.grid is not None:
         outside = [pid for pid in deck.points
                    if any(not (ax[0] - 1e-9 <= c <= ax[-1] + 1e-9)
