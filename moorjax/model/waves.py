@@ -123,6 +123,11 @@ class AiryWaves(eqx.Module):
     MoorDyn's zero-frequency component; it moves the stretching, not the flow).
     See the module docstring for the formulas and the free surface.
 
+    ``k`` is solved when the model is built: gradients with respect to the
+    amplitudes and phases flow through the fields, but to differentiate with
+    respect to ω or h build the model inside the differentiated function (the
+    dispersion solve is differentiable, :func:`wave_number`).
+
     Args:
         wave: the components.
         depth: water depth h [m] (> 0), the seabed at z = −h.
