@@ -148,6 +148,50 @@ def test_wave_files_of_the_public_decks_give_moordyn_components():
     assert w3.grid is not None and w3.grid[2][0] == -51.0
 
 
+def test_elevation_record_becomes_its_fourier_components(tmp_path):
+    """WaveKin 3 semantics: samples at dtWave (an odd count loses its last), the
+    mean as a level, 2X_j/N components, bins above 0.5 Hz cut."""
+    shutil.copy(PUBLIC / "wavekin_2" / "water_grid.txt", tmp_path / "water_grid.txt")
+    dt, n = 0.25, 81  # 81 samples -> 80 used: T = 20 s, Δω = 2π/20 rad/s
+    t = np.arange(n) * dt
+    w1, w_hi = 3 * 2 * np.pi / 20, 16 * 2 * np.pi / 20  # 0.15 Hz kept, 0.8 Hz cut
+    eta = 0.3 + 0.5 * np.cos(w1 * t + 0.4) + 0.2 * np.cos(w_hi * t - 1.0)
+    (tmp_path / "wave_elevation.txt").write_text("".join(f"{a:.17g} {b:.17g}\n" for a, b in zip(t, eta)))
+    w = read_deck_waves(tmp_path, 3, dt)
+    assert abs(w.mean_level - 0.3) < 1e-12
+    big = w.amplitude > 1e-9
+    np.testing.assert_allclose(w.omega[big], [w1], rtol=1e-12)
+    np.testing.assert_allclose(w.amplitude[big], [0.5], rtol=1e-9)
+    np.testing.assert_allclose(w.phase[big], [0.4], atol=1e-9)
+    assert np.max(w.omega) <= np.pi  # nothing above 0.5 Hz
+
+
+def test_spectrum_rows_with_directions_and_a_constant_level(tmp_path):
+    (tmp_path / "wave_frequencies.txt").write_text("0.0 0.0 0.25\n0.5 0.0 2.0 1.0\n0.5 1.0 0.0 -0.5\n")
+    w = read_deck_waves(tmp_path, 7)  # repeated frequencies in two directions: mode 7 only
+    assert w.mean_level == 0.25  # |A| sin(arg A) of the 0 rad/s row
+    np.testing.assert_allclose(w.amplitude, [2.0, 1.0])
+    np.testing.assert_allclose(w.heading, [1.0, -0.5])
+    with pytest.raises(InputError, match="must increase strictly for WaveKin = 2"):
+        shutil.copy(PUBLIC / "wavekin_2" / "water_grid.txt", tmp_path / "water_grid.txt")
+        read_deck_waves(tmp_path, 2)
+
+
+def test_vmap_over_sea_states_equals_a_loop():
+    line, _ = _line()
+    r = jnp.asarray(np.linspace([-15.0, 0, -20], [14.0, 0, -12], 7))
+    v = jnp.zeros_like(r)
+
+    def force(amp, phase):
+        env = mj.Environment(60.0, seabed=mj.Seabed(), waves=AiryWaves(IrregularWave(0.6, amp, phase), 60.0))
+        return line.element.nodal_forces(line, env, r, v, 1.3)
+
+    amps, phases = jnp.array([0.0, 0.5, 1.5]), jnp.array([0.0, 1.0, 2.0])
+    batched = jax.vmap(force)(amps, phases)
+    for i in range(3):
+        np.testing.assert_allclose(batched[i], force(amps[i], phases[i]), rtol=1e-12, atol=1e-9)
+
+
 def _deck(tmp_path, wavekin, files):
     src = (PUBLIC / "wavekin_2" / "wavekin_3.txt").read_text()
     deck = tmp_path / "d.txt"
