@@ -332,6 +332,7 @@ def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
 @eqx.filter_jit
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
+    env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     r0 = initial_guess(line, env, t).r if init is None else init.r
     fn = _residual(line, env, t)
     # 1) a regularised Newton descent on the static energy (``_descent``) finds the
