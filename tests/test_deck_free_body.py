@@ -1,0 +1,192 @@
+"""Free bodies (``BODIES`` rows with attachment ``free``): :class:`SubmergedBody`.
+
+- the body's rigid dynamics: torque-free rotation follows Euler's equations
+  (gyroscopic term, MoorDyn's rotation order), fixed points move as the time
+  derivative of their positions, a pendulum's restoring moment is −W·c·sin φ;
+- a deck's free body carries the deck's values, its points' and its lines' end
+  nodes' inertia (``tests/data/body_free.dat``);
+- ``tests/data/free_body_buoy.dat`` (a buoyant body tilted 5°/−8°, held by three
+  chains; made for moorjax) against MoorDyn 2.7.2 run here: the static pose
+  against MoorDyn's state settled over 200–400 s of dynamics, and 2 s of
+  dynamics from MoorDyn's un-relaxed initial state (``Init_NoIC``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from moorjax.body import SubmergedBody
+from moorjax.body.submerged import angular_velocity_map, moordyn_rotation
+from moorjax.io import build_scene, read_deck
+from moorjax.io.frames import moordyn_rotation as frames_rotation
+
+DATA = Path(__file__).parent / "data"
+FREE = DATA / "body_free.dat"
+BUOY = DATA / "free_body_buoy.dat"
+
+
+def _body(**kw):
+    args = dict(mass=2.0e3, origin=(1.0, 2.0, -10.0), inertia=(1.0e3, 2.0e3, 3.0e3), rho=1025.0,
+                g=9.80665)
+    args.update(kw)
+    return SubmergedBody(args.pop("mass"), args.pop("origin"), **args)
+
+
+def test_rotation_is_moordyns():
+    angles = np.array([0.3, -0.7, 1.1])
+    np.testing.assert_allclose(moordyn_rotation(jnp.asarray(angles)), frames_rotation(angles), atol=1e-14)
+
+
+@pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), (0.4, -0.3, 1.2)])
+def test_torque_free_rotation_follows_eulers_equations(orientation):
+    body = _body(orientation=orientation, g=0.0)
+    omega = jnp.array([0.3, -0.2, 0.5])
+    z = body.rest_state().at[9:].set(omega)
+    acc = np.asarray(body.rate(0.0, z, jnp.zeros(6)))[9:]
+    rot = np.asarray(moordyn_rotation(jnp.asarray(orientation)))
+    w_b = rot.T @ np.asarray(omega)
+    inertia = np.array([1.0e3, 2.0e3, 3.0e3])
+    dw_b = -np.cross(w_b, inertia * w_b) / inertia  # Euler: I·ω̇ = −ω×Iω in body axes
+    np.testing.assert_allclose(acc, rot @ dw_b, rtol=1e-12, atol=1e-14)
+    assert np.abs(dw_b).max() > 0.01  # the gyroscopic term is not negligible here
+
+
+def test_fixed_points_move_as_the_derivative_of_their_positions():
+    body = _body(orientation=(0.2, 0.5, -0.4))
+    pose = jnp.array([0.3, -0.1, 0.2, 0.1, -0.2, 0.3])
+    vel = jnp.array([0.5, -0.4, 0.1, 0.2, -0.3, 0.4])  # (v, ω)
+    local = jnp.array([[3.0, -1.0, 2.0], [0.0, 0.5, -4.0]])
+    rates = body.rate(0.0, jnp.concatenate([pose, vel]), jnp.zeros(6))[:6]
+    _, dpos = jax.jvp(lambda p: body.point_position(p, local), (pose,), (rates,))
+    np.testing.assert_allclose(dpos, body.point_velocity(pose, vel, local), rtol=1e-12)
+    # the angles' rates map back to ω
+    e = angular_velocity_map(body.orientation + pose[3:])
+    np.testing.assert_allclose(e @ rates[3:], vel[3:], rtol=1e-12)
+
+
+def test_pendulum_restoring_moment_and_net_weight():
+    m, v = 2.0e3, 1.5
+    body = _body(mass=m, volume=v, cg=(0.0, 0.0, -1.0))
+    w = (m - 1025.0 * v) * 9.80665  # net weight [N], weight and buoyancy at the CG (MoorDyn)
+    for phi in (0.0, 0.2, -0.5):
+        load = np.asarray(body.mean_load(jnp.array([0.0, 0.0, 0.0, phi, 0.0, 0.0])))
+        np.testing.assert_allclose(load, [0, 0, -w, -w * np.sin(phi), 0, 0], atol=1e-9 * w)
+    np.testing.assert_allclose(np.asarray(body.hydrostatic)[3, 3], w, rtol=1e-12)
+
+
+def test_drag_acts_on_velocity_relative_to_the_current_in_body_axes():
+    from moorjax.model import UniformCurrent
+
+    cda = np.array([2.0, 5.0, 7.0, 3.0, 4.0, 6.0])
+    yaw = np.pi / 2  # body x along global y
+    body = _body(orientation=(0.0, 0.0, yaw), cda=cda, current=UniformCurrent([0.0, 0.8, 0.0]))
+    f = np.asarray(body.mean_load(jnp.zeros(6)))
+    np.testing.assert_allclose(f[:3] + [0, 0, 2.0e3 * 9.80665], [0, 0.5 * 1025 * 2.0 * 0.64, 0], atol=1e-9)
+    assert np.asarray(body.mean_load(jnp.zeros(6), loads=False))[1] == 0.0
+
+
+def test_deck_free_body_values_and_end_node_inertia():
+    deck = read_deck(FREE)
+    (body,) = build_scene(deck).bodies
+    assert isinstance(body, SubmergedBody) and body.label == "B1"
+    np.testing.assert_allclose(body.orientation, np.radians([5.0, -8.0, 30.0]))
+    np.testing.assert_allclose(body.cg, [0, 0, -1])
+    np.testing.assert_allclose(body.inertia, [1e6, 1e6, 2e6])
+    np.testing.assert_allclose(body.cda, [20, 20, 20, 40, 40, 40])
+    np.testing.assert_allclose(body.ca, [1, 1, 1])
+    assert float(body.mass) == 2.0e5 and float(body.volume) == 150.0
+    np.testing.assert_allclose(body.cb, body.cg)
+    # each point: half of a 95/20 m chain element (40 kg/m) and its added mass
+    # ρ·A·(l/2)·Ca_n across the line (CaAx = 0): trace μl/2·3 + ρA(l/2)·Ca_n·2
+    half = 95.0 / 20 / 2
+    area = np.pi * 0.08**2 / 4
+    trace = 40.0 * half * 3 + 1025.0 * area * half * 1.0 * 2
+    np.testing.assert_allclose(np.trace(np.asarray(body.fixture_inertia), axis1=1, axis2=2), trace)
+    m6 = np.asarray(body.mass_matrix(jnp.zeros(6)))
+    np.testing.assert_allclose(m6, m6.T, atol=1e-6)
+    # translational mass: body, its added mass ρ·V·Ca and the three end nodes
+    assert np.trace(m6[:3, :3]) == pytest.approx(3 * 2.0e5 + 3 * 1025 * 150.0 + 3 * trace, rel=1e-12)
+
+
+def test_body_without_inertia_is_refused():
+    with pytest.raises(ValueError, match=r"body 'B': the 6×6 mass matrix .* is singular"):
+        SubmergedBody(0.0, (0, 0, -5), inertia=0.0, volume=2.0, ca=1.0, label="B")
+
+
+def _moordyn():
+    return pytest.importorskip("moordyn")
+
+
+@pytest.mark.slow
+def test_buoy_statics_match_moordyn_settled_state():
+    """~70 s (compiling the system statics)."""
+    from moorjax.statics import solve_system_statics
+
+    moordyn = _moordyn()
+    s = moordyn.Create(str(BUOY))
+    moordyn.Init(s, [], [])
+    b = moordyn.GetBody(s, 1)
+    poses, t = [], 0.0
+    for _ in range(400):
+        moordyn.Step(s, [], [], t, 1.0)
+        t += 1.0
+        if t > 200:
+            poses.append(np.array(moordyn.GetBodyState(b)[0]))
+    moordyn.Close(s)
+    settled = np.mean(poses, axis=0)
+    spread = np.ptp(poses, axis=0)  # MoorDyn's slowly decaying swing
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(BUOY))
+    st = solve_system_statics(scene)
+    (body,) = scene.bodies
+    pos = np.asarray(body.origin + st.poses[0, :3])
+    ang = np.asarray(body.orientation + st.poses[0, 3:])
+    # the body rises 3.4 m and levels from (5°, −8°); MoorDyn swings ±4 mm, ±0.005 rad
+    assert spread[2] < 0.01 and spread[3:5].max() < 0.012
+    np.testing.assert_allclose(pos, settled[:3], atol=0.005)
+    np.testing.assert_allclose(ang, settled[3:], atol=0.003)
+
+
+@pytest.mark.slow
+def test_buoy_dynamics_match_moordyn():
+    """2 s of the release from the deck pose; ~60 s (compiling)."""
+    from moorjax.dynamics import simulate
+    from moorjax.model import LineState
+
+    moordyn = _moordyn()
+    s = moordyn.Create(str(BUOY))
+    moordyn.Init_NoIC(s, [], [])
+    nodes = []
+    for i in range(moordyn.GetNumberLines(s)):
+        ln = moordyn.GetLine(s, i + 1)
+        nodes.append(np.array([moordyn.GetLineNodePos(ln, k) for k in range(moordyn.GetLineN(ln) + 1)]))
+    b = moordyn.GetBody(s, 1)
+    ts = np.arange(0.0, 2.0 + 1e-9, 0.1)
+    hist = [np.array(moordyn.GetBodyState(b)[0])]
+    for t in ts[:-1]:
+        moordyn.Step(s, [], [], t, 0.1)
+        hist.append(np.array(moordyn.GetBodyState(b)[0]))
+    moordyn.Close(s)
+    hist = np.array(hist)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(BUOY))
+    (body,) = scene.bodies
+    init = tuple(LineState(r=jnp.asarray(r[1:-1]), v=jnp.zeros((len(r) - 2, 3))) for r in nodes)
+    res = simulate(scene, ts=ts, init=init + (body.rest_state(),))
+    pose = np.asarray(res.body_pose)[:, 0]
+    pos = pose[:, :3] + np.asarray(body.origin)
+    ang = pose[:, 3:] + np.asarray(body.orientation)
+    rise = np.ptp(hist[:, 2])
+    tilt = np.ptp(hist[:, 3:5], axis=0).max()
+    assert rise > 1.0 and tilt > 0.1  # it rises and levels
+    assert np.abs(pos - hist[:, :3]).max() < 0.003 * rise, np.abs(pos - hist[:, :3]).max()
+    assert np.abs(ang - hist[:, 3:]).max() < 0.02 * tilt, np.abs(ang - hist[:, 3:]).max()
