@@ -190,3 +190,15 @@ def test_buoy_dynamics_match_moordyn():
     assert rise > 1.0 and tilt > 0.1  # it rises and levels
     assert np.abs(pos - hist[:, :3]).max() < 0.003 * rise, np.abs(pos - hist[:, :3]).max()
     assert np.abs(ang - hist[:, 3:]).max() < 0.02 * tilt, np.abs(ang - hist[:, 3:]).max()
+
+
+def test_free_point_statics_feel_the_current_drag():
+    """A free point's mean load (system statics) holds the current's drag at rest."""
+    from moorjax.body import ConnectionPoint
+    from moorjax.model import UniformCurrent
+
+    u = np.array([0.6, -0.8, 0.0])
+    point = ConnectionPoint(100.0, (0, 0, -10), cda=2.0, current=UniformCurrent(u))
+    f = np.asarray(point.mean_load(jnp.zeros(6)))
+    np.testing.assert_allclose(f[:2], 0.5 * 1025.0 * 2.0 * np.linalg.norm(u) * u[:2], rtol=1e-12)
+    assert np.all(np.asarray(point.mean_load(jnp.zeros(6), loads=False))[:2] == 0.0)
