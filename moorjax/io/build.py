@@ -189,6 +189,12 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
     lines, weights = [], []
     for dl in deck.lines:
         n = int(segments) if segments is not None else dl.n_segments
+        if n < 2:
+            where = "--segments 1" if segments is not None else (
+                f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1")
+            raise InputError(
+                f"{where}: a line of one segment has no free node, which moorjax's static and "
+                "implicit solvers do not support yet; give NumSegs >= 2 (or --segments N >= 2)")
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
