@@ -165,7 +165,10 @@ class SubmergedBody(AbstractBody):
         self.g = jnp.asarray(g, dtype=float)
         self.current = current
         self.label = str(label)
-        m6 = np.asarray(self.mass_matrix(jnp.zeros(6)))
+        try:
+            m6 = np.asarray(self.mass_matrix(jnp.zeros(6)))
+        except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError):
+            return  # traced parameters (jax.grad, vmap): no check
         eig = np.linalg.eigvalsh(0.5 * (m6 + m6.T))
         if not np.all(eig > 0):
             raise ValueError(
