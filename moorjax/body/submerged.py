@@ -10,7 +10,8 @@ parameters whenever it is evaluated (so ``jax.grad`` reaches them):
   centre of buoyancy ``cb`` (MoorDyn puts both at the CG: the deck builder
   gives ``cb = cg``);
 - drag ½ρ·R·diag(CdA)·Rᵀ·u·|u| on the velocity ``u`` of the water relative to
-  the reference point (the current at its depth, if any) and ½ρ·R·diag(CdA_rot)·Rᵀ·(−ω)·|ω|
+  the reference point (the current at its depth and the environment's waves
+  there, if any; statics: the current only, the mean state) and ½ρ·R·diag(CdA_rot)·Rᵀ·(−ω)·|ω|
   on the rotation (MoorDyn's form: |u| is the norm of the vector);
 - added mass ρ·V·Ca (translation, body axes) at the reference point;
 - fixtures: points fixed in the body with their own mass [kg] (weighed and
@@ -235,12 +236,19 @@ class SubmergedBody(AbstractBody):
         forces = lift[:, None] * up
         return jnp.concatenate([jnp.sum(forces, 0), jnp.sum(jnp.cross(arms, forces), 0)])
 
-    def drag_wrench(self, t, pose, velocity) -> Array:
-        """(6,) drag on the water's velocity relative to the body [N, N·m]."""
+    def drag_wrench(self, t, pose, velocity, env=None) -> Array:
+        """(6,) drag on the water's velocity relative to the body [N, N·m]: the current
+        and (with ``env.waves``) the wave particle velocity at the reference point."""
         rot = self.rotation(pose)
         u = -velocity[:3]
+        z_current = self.origin[2] + pose[2]
+        if env is not None and env.waves is not None:  # MoorDyn's body kinematics at its reference point
+            pos = self.origin + pose[:3]
+            eta, u_wave, _ = env.waves.kinematics(pos, t)
+            u = u + u_wave
+            z_current = env.waves.current_height(pos, eta)
         if self.current is not None:
-            u = u + self.current.velocity(self.origin[2] + pose[2], t)
+            u = u + self.current.velocity(z_current, t)
         f = 0.5 * self.rho * rot @ (self.cda[:3] * (rot.T @ abs_times(u)))
         m = 0.5 * self.rho * rot @ (self.cda[3:] * (rot.T @ abs_times(-velocity[3:])))
         return jnp.concatenate([f, m])
@@ -253,7 +261,7 @@ class SubmergedBody(AbstractBody):
         _, first, i_o = self._rigid(rot)
         bias = jnp.concatenate([jnp.cross(omega, jnp.cross(omega, first)),
                                 jnp.cross(omega, i_o @ omega)])
-        load = self.gravity_wrench(pose) + self.drag_wrench(t, pose, vel) + mooring - bias
+        load = self.gravity_wrench(pose) + self.drag_wrench(t, pose, vel, env) + mooring - bias
         acc = jnp.linalg.solve(self.mass_matrix(pose), load)
         angle_rates = jnp.linalg.solve(angular_velocity_map(self.orientation + pose[3:]), omega)
         return jnp.concatenate([vel[:3], angle_rates, acc])

@@ -21,7 +21,7 @@ d     segment strain rate             ``segment_strain_rate``    1/s
 MoorDyn's other flags — ``D`` (hydrodynamic drag force at each node), ``K``
 (curvature), ``V`` (VIV lift force), ``b`` (seabed contact force) — are not
 written: the deck reader warns naming them. The water velocity ``U`` is the
-current's (moorjax's lines have no wave kinematics here). Strain, its rate, the
+waves' particle velocity plus the current, as the lines' drag sees it. Strain, its rate, the
 elastic tension and the damping force are those of the straight segments
 between nodes (the linear element's; for the Hermite element, of the chords).
 
@@ -51,6 +51,22 @@ def split_flags(text: str) -> tuple[str, str, str]:
     missing = "".join(f for f in NOT_WRITTEN if f in chars)
     unknown = "".join(c for c in chars if c not in WRITTEN and c not in NOT_WRITTEN and c != "-")
     return written, missing, unknown
+
+
+def water_velocity(env, r, t):
+    """Water velocity (n, 3) [m/s] at points r (n, 3) at time t: waves plus current
+    (sampled where the waves' model says, as the line physics does)."""
+    import jax.numpy as jnp
+
+    u = jnp.zeros_like(r)
+    z = r[:, 2]
+    if env.waves is not None:
+        eta, u_wave, _ = env.waves.kinematics(r, t)
+        u = u + u_wave
+        z = env.waves.current_height(r, eta)
+    if env.current is not None:
+        u = u + env.current.velocity(z, t)
+    return u
 
 
 def _segments(r, v, length):
@@ -98,12 +114,8 @@ def line_output_variables(res, scene, flags: dict) -> dict:
         if "v" in f and have_v:
             arrays["v"][:, j, : n + 1] = v
         if "U" in f:
-            u = np.zeros_like(r)
-            if scene.env.current is not None:
-                ts = np.asarray(res.ts)
-                u = np.asarray(jax.vmap(lambda z, t: scene.env.current.velocity(z, t))(
-                    r[..., 2], ts))
-            arrays["U"][:, j, : n + 1] = u
+            arrays["U"][:, j, : n + 1] = np.asarray(jax.vmap(
+                lambda rr, t: water_velocity(scene.env, rr, t))(r, np.asarray(res.ts)))
         if "t" in f:
             arrays["t"][:, j, :n] = np.asarray(jax.vmap(lt.axial.tension)(strain))
         if "c" in f and have_v:
@@ -115,7 +127,7 @@ def line_output_variables(res, scene, flags: dict) -> dict:
     meta = dict(
         v=("node_velocity", ("time", "line", "node", "axis"), "m/s", "node velocity"),
         U=("node_water_velocity", ("time", "line", "node", "axis"), "m/s",
-           "water (current) velocity at the node"),
+           "water velocity at the node (waves and current)"),
         t=("segment_elastic_tension", ("time", "line", "segment"), "N",
            "elastic tension of the segment (without internal damping)"),
         c=("segment_damping_force", ("time", "line", "segment", "axis"), "N",
