@@ -316,3 +316,20 @@ def test_gradients_reach_the_body_parameters():
     fd = (float(heave_acc(1.5 + h)) - float(heave_acc(1.5 - h))) / (2 * h)
     np.testing.assert_allclose(g, fd, rtol=1e-6)
     assert abs(g) > 1.0
+
+
+def test_drag_sees_the_wave_velocity_at_the_reference_point():
+    from moorjax.model import Environment
+    from moorjax.model.waves import AiryWaves, IrregularWave
+
+    waves = AiryWaves(IrregularWave([0.8], [1.5], [0.3]), 50.0)
+    env = Environment(50.0, 1025.0, 9.80665, waves=waves)
+    body = _body(cda=4.0, g=0.0)  # g = 0: drag alone
+    z = body.rest_state()
+    t = 1.7
+    acc = np.asarray(body.rate(t, z, jnp.zeros(6), env))[6:9]
+    _, u, _ = waves.kinematics(body.origin, t)
+    drag = 0.5 * 1025.0 * 4.0 * np.linalg.norm(u) * np.asarray(u)
+    assert np.linalg.norm(u) > 0.1
+    np.testing.assert_allclose(acc * 2.0e3, drag, rtol=1e-10)
+    assert np.all(np.asarray(body.rate(t, z, jnp.zeros(6)))[6:9] == 0.0)  # no env: still water
