@@ -138,8 +138,15 @@ class ConnectionPoint(AbstractBody):
         return jnp.concatenate([vel[:3], zero, acc, zero])
 
     def mean_load(self, pose, t=0.0, env=None, *, loads: bool = True) -> Array:
-        """The net weight, and the unit rotational stiffness (see :attr:`hydrostatic`)."""
-        return -self.hydrostatic @ pose + self._static_force(env)
+        """The net weight, the unit rotational stiffness (see :attr:`hydrostatic`) and,
+        with ``loads``, the current's drag ½ρ·CdA·|U|U on the point at rest (the
+        current at the point's height at time ``t``)."""
+        f = -self.hydrostatic @ pose + self._static_force(env)
+        if loads and self.current is not None:
+            rho, _ = self._water(env)
+            u = self.current.velocity(self.origin[2] + pose[2], t)
+            f = f.at[:3].add(0.5 * rho * self.cda * abs_times(u))
+        return f
 
     def energy(self, z) -> Array:
         _, vel, _ = self.split(z)

@@ -42,6 +42,8 @@ class SimulationResult(eqx.Module):
         num_evaluations: vector-field evaluations (with ``count_newton``).
         body_pose, body_velocity: (k, n_bodies, 6) displacements η [m, rad] and
             velocities η̇ of the scene's floating bodies (``None`` without bodies).
+        velocities: per-line tuple of (k, n+1, 3) node velocities [m/s] with
+            ``positions``, else ``None``.
     """
 
     ts: Array
@@ -60,6 +62,7 @@ class SimulationResult(eqx.Module):
     num_evaluations: Any = None
     body_pose: Any = None
     body_velocity: Any = None
+    velocities: Any = None
 
     def succeeded(self):
         return self.result == diffrax.RESULTS.successful
@@ -141,6 +144,7 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
         result=sol.result,
         body_pose=cut(outs["body_pose"]) if "body_pose" in outs else None,
         body_velocity=cut(outs["body_velocity"]) if "body_velocity" in outs else None,
+        velocities=(tuple(cut(p) for p in outs["velocities"]) if with_nodes else None),
     )
 
 
