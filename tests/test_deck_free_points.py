@@ -131,6 +131,23 @@ def test_moorpy_case2_reported_statics_is_the_catenary_system():
         solve_system_statics(scene, method="catenary")
 
 
+def test_point_on_a_slack_weightless_line_settles_at_full_stretch():
+    """MoorDyn's ``lifting.txt``: a 1 t point 100 m under a fixed point on a 100.5 m
+    weightless line (it starts slack: no stiffness at all, a singular Newton matrix).
+    The regularised step moves it along its weight until the line carries it:
+    T = m·g, hanging at 100.5·(1 + mg/EA) m."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(DATA / "public" / "lifting.txt"))
+    st = solve_system_statics(scene, method="fem")
+    assert st.converged
+    weight = 1e3 * 9.80665
+    (line,) = st.lines
+    np.testing.assert_allclose([float(line.tension_a), float(line.tension_b)], weight, rtol=1e-6)
+    z = float(scene.bodies[0].origin[2] + st.poses[0, 2])
+    np.testing.assert_allclose(z, -100.5 * (1 + weight / 1e9), atol=1e-6)
+
+
 @pytest.mark.slow
 def test_free_point_in_dynamic_current_matches_moordyn():
     ref = json.loads((DYN.parent / "moordyn_ref.json").read_text())

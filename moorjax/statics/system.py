@@ -164,6 +164,26 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
     return out
 
 
+def _newton_step(jac, g):
+    """The Newton step −J⁻¹g on the poses; where J is singular or undefined (a point on
+    slack weightless lines has no stiffness, and such a line's shape, hence its
+    implicit derivative, is undetermined) a regularised step (μI − J)Δη = g with
+    μ = |g|max per metre (translations) or per 0.05 rad (rotations), which moves
+    along the net force where J = 0 and becomes Newton's step as g vanishes."""
+    g = g.ravel()
+    try:
+        step = np.linalg.solve(jac, -g)
+        if np.all(np.isfinite(step)) and np.linalg.cond(jac) < 1e12:
+            return step
+    except np.linalg.LinAlgError:
+        pass
+    jac = np.where(np.isfinite(jac), jac, 0.0)
+    gb = g.reshape(-1, 6)
+    scale = max(float(np.max(np.abs(g))), 1e-300)
+    mu = np.tile(np.array([scale / 1.0] * 3 + [scale / 0.05] * 3), gb.shape[0])
+    return np.linalg.solve(np.diag(mu) - jac, g)
+
+
 def _ends_above_bed(scene, out) -> bool:
     """Whether every catenary line's ends are on or above the seabed."""
     if scene.env.seabed is None:
@@ -183,7 +203,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
     for it in range(1, max_iterations + 1):
         g, jac = _newton_parts(scene, poses, t, bool(loads), inits, methods)
         g_np = np.asarray(g)
-        if not np.all(np.isfinite(g_np)) or not np.all(np.isfinite(np.asarray(jac))):
+        if not np.all(np.isfinite(g_np)):
             break
         if scale is None:
             st = _line_statics_at(scene, poses, t, inits, methods)
@@ -193,7 +213,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
         if np.max(np.abs(g_np)) < tol * scale:
             converged = True
             break
-        step = np.linalg.solve(np.asarray(jac), -g_np.ravel()).reshape(nb, 6)
+        step = _newton_step(np.asarray(jac), g_np).reshape(nb, 6)
         # damp large rotations and translations (the line statics must stay reachable)
         big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
         # backtracking: seabed contact makes the imbalance kinked, so a full
