@@ -45,3 +45,85 @@ def test_import_turns_the_cache_on_and_off(tmp_path):
     off = _cache_dir_after_import({"MOORJAX_CACHE_DIR": str(tmp_path / "x"),
                                    "MOORJAX_COMPILATION_CACHE": "0"})
     assert off == ""
+
+
+# -- the integration is kept in the persistent cache ---------------------------
+
+def _small_run():
+    import equinox as eqx
+
+    import moorjax as mj
+    from moorjax.dynamics.initial import equilibrium_state
+    from moorjax.dynamics.settings import plan
+    from moorjax.dynamics.vector_field import pack
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+
+    scene = build_scene(read_deck(example_path("oc3_catenary")), segments=4)
+    scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene,
+                        mj.SinePath((-5.2, 0.0, -70.0), (1.0, 0.0, 0.0), 10.0))
+    return scene, pack(equilibrium_state(scene, 0.0).state), plan(1.0, scene=scene)
+
+
+def test_integration_compiles_without_host_callbacks():
+    """JAX never caches a program with host callbacks: the compiled integration of
+    host-checked settings has none (diffrax's input checks, which plan() makes on
+    the host, compile to NaN selects), so a new process loads it from the cache."""
+    import equinox as eqx
+    import jax
+
+    from moorjax.dynamics.integrate import integrate
+
+    scene, y0, p = _small_run()
+    assert p.host_checked
+    text = eqx.filter_jit(integrate).lower(scene, y0, p).as_text()
+    assert "callback" not in text
+    # witness: the same lowering shows a runtime check that stays a host callback
+    f = jax.jit(lambda x: eqx.error_if(x, x < 0, "negative"))
+    assert "callback" in f.lower(1.0).as_text()
+
+
+def test_checks_switch_back_after_the_trace():
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from equinox import _errors
+
+    before = _errors.EQX_ON_ERROR
+    with _cache.host_checked_inputs():
+        assert _errors.EQX_ON_ERROR == ("nan" if before == "raise" else before)
+    assert _errors.EQX_ON_ERROR == before
+    # a user's own check outside moorjax's integration still raises
+    f = eqx.filter_jit(lambda x: eqx.error_if(x, x < 0, "negative"))
+    try:
+        f(jnp.asarray(-1.0))
+    except Exception as exc:  # EquinoxRuntimeError / JaxRuntimeError
+        assert "negative" in str(exc)
+    else:
+        raise AssertionError("error_if did not raise")
+
+
+def test_traced_output_times_keep_diffrax_checks():
+    import jax
+
+    from moorjax.dynamics.settings import plan
+
+    flags = []
+
+    def build(ts):
+        flags.append(plan(ts=ts).host_checked)
+        return ts
+
+    jax.jit(build)(jax.numpy.linspace(0.1, 1.0, 4))
+    assert flags == [False]
+    assert plan(1.0).host_checked
+
+
+def test_first_step_must_be_positive():
+    import pytest
+
+    from moorjax.dynamics.settings import plan
+
+    for bad in (-0.01, 0.0, float("nan")):
+        with pytest.raises(ValueError, match="dt0"):
+            plan(1.0, dt0=bad)

@@ -10,6 +10,7 @@ names the codes.
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import diffrax
@@ -19,6 +20,7 @@ import jax.experimental
 import numpy as np
 from jaxtyping import Array
 
+from .._cache import host_checked_inputs
 from .adjoint import diffrax_adjoint
 from .vector_field import end_outputs, unpack, vector_field
 
@@ -103,21 +105,11 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     else:
         saveat = diffrax.SaveAt(ts=s.ts, fn=lambda t, y, args: end_outputs(t, y, args, with_nodes))
     dt0 = None if isinstance(s.controller, diffrax.StepTo) else s.dt0
-    sol = diffrax.diffeqsolve(
-        term,
-        s.solver,
-        s.t0,
-        s.ts[-1],
-        dt0,
-        y0,
-        args=scene,
-        saveat=saveat,
-        stepsize_controller=s.controller,
-        max_steps=s.max_steps,
-        throw=False,
-        progress_meter=s.meter,
-        adjoint=diffrax_adjoint(s, y0),
-    )
+    # plan() checked ts, t0 and dt0 on the host: diffrax's runtime checks of
+    # them then compile without host callbacks (see moorjax._cache)
+    checks = host_checked_inputs() if s.host_checked else contextlib.nullcontext()
+    with checks:
+        sol = _solve(term, s, dt0, y0, scene, saveat)
     if keep_final:
         outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
         cut = lambda a: a[:-1]  # noqa: E731
@@ -141,6 +133,24 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
         result=sol.result,
         body_pose=cut(outs["body_pose"]) if "body_pose" in outs else None,
         body_velocity=cut(outs["body_velocity"]) if "body_velocity" in outs else None,
+    )
+
+
+def _solve(term, s, dt0, y0, scene, saveat):
+    return diffrax.diffeqsolve(
+        term,
+        s.solver,
+        s.t0,
+        s.ts[-1],
+        dt0,
+        y0,
+        args=scene,
+        saveat=saveat,
+        stepsize_controller=s.controller,
+        max_steps=s.max_steps,
+        throw=False,
+        progress_meter=s.meter,
+        adjoint=diffrax_adjoint(s, y0),
     )
 
 
