@@ -127,3 +127,68 @@ def test_first_step_must_be_positive():
     for bad in (-0.01, 0.0, float("nan")):
         with pytest.raises(ValueError, match="dt0"):
             plan(1.0, dt0=bad)
+
+
+# -- programs stored by structure (StoredProgram) --------------------------------
+
+def _program_fixture():
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    class Spring(eqx.Module):
+        k: object  # [N/m]
+        n: int = eqx.field(static=True)
+
+    traces = []
+
+    def force(spring, x, *, scale=1.0):
+        traces.append(1)  # runs at trace time only
+        return {"f": -spring.k * x[: spring.n] * scale, "n": spring.n}
+
+    return Spring, traces, force, jnp
+
+
+def test_stored_program_loads_without_tracing(monkeypatch, tmp_path):
+    import jax
+
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    Spring, traces, force, jnp = _program_fixture()
+    x = jnp.arange(4.0)
+    first = _cache.StoredProgram(force)
+    out = first(Spring(jnp.asarray(2.0), 3), x)
+    assert traces == [1] and out["n"] == 3
+    np_out = jax.device_get(out["f"])
+    assert list(np_out) == [-0.0, -2.0, -4.0]
+    assert len([p for p in os.listdir(tmp_path / "programs") if p.endswith(".hlo")]) == 1
+    # "a new process": a fresh wrapper finds the program on disk and never traces
+    again = _cache.StoredProgram(force)
+    out = again(Spring(jnp.asarray(3.0), 3), x)  # other values, same structure
+    assert traces == [1] and list(jax.device_get(out["f"])) == [-0.0, -3.0, -6.0]
+    # another structure (static field, static keyword, shape) is another program
+    again(Spring(jnp.asarray(3.0), 2), x)
+    again(Spring(jnp.asarray(3.0), 3), x, scale=2.0)
+    again(Spring(jnp.asarray(3.0), 3), jnp.arange(5.0))
+    assert traces == [1, 1, 1, 1]
+    # traced arguments (under the caller's transform) use the plain jit
+    g = jax.grad(lambda k: again(Spring(k, 3), x)["f"].sum())(jnp.asarray(1.0))
+    assert float(g) == -3.0
+
+
+def test_stored_program_off_and_unstorable(monkeypatch, tmp_path):
+    import jax
+
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    Spring, traces, force, jnp = _program_fixture()
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "0")
+    _cache.StoredProgram(force)(Spring(jnp.asarray(2.0), 3), jnp.arange(4.0))
+    assert not (tmp_path / "programs").exists()
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+
+    def noisy(x):
+        jax.debug.callback(lambda v: None, x)  # host callbacks cannot be exported
+        return 2 * x
+
+    assert float(_cache.StoredProgram(noisy)(jnp.asarray(1.5))) == 3.0
+    assert any(p.endswith(".none") for p in os.listdir(tmp_path / "programs"))
+    assert float(_cache.StoredProgram(noisy)(jnp.asarray(2.5))) == 5.0

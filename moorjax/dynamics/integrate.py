@@ -136,6 +136,15 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     )
 
 
+def storable_run(scene, y0, settings, *, count: bool = False, keep_final: bool = True) -> bool:
+    """Whether :func:`integrate` with these arguments compiles to a program that
+    can be stored (``moorjax._cache.StoredProgram``): no host callbacks (no
+    evaluation count, no progress meter) and host-checked settings."""
+    del scene, y0, keep_final
+    return (not count and settings.host_checked
+            and isinstance(settings.meter, diffrax.NoProgressMeter))
+
+
 def _solve(term, s, dt0, y0, scene, saveat):
     return diffrax.diffeqsolve(
         term,

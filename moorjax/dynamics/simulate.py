@@ -25,7 +25,8 @@ import jax.numpy as jnp
 from .initial import initial_state as initial_state
 from .initial import equilibrium_state, not_converged_message
 from .integrate import SimulationResult as SimulationResult
-from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver
+from .._cache import StoredProgram
+from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
 from .settings import Plan as Plan
 from .settings import Settings as Settings
 from .settings import check_time_span as check_time_span
@@ -33,7 +34,7 @@ from .settings import default_output_times as default_output_times
 from .settings import plan as plan
 from .vector_field import pack
 
-_integrate = eqx.filter_jit(integrate)
+_integrate = StoredProgram(integrate, storable=storable_run)
 
 
 def simulate(

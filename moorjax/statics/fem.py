@@ -26,6 +26,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
+from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
@@ -280,7 +281,7 @@ def solve_line_statics(
     return out
 
 
-@eqx.filter_jit
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     r0 = initial_guess(line, env, t).r if init is None else init.r
