@@ -4,6 +4,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from moorjax import _cache
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -192,3 +194,36 @@ def test_stored_program_off_and_unstorable(monkeypatch, tmp_path):
     assert float(_cache.StoredProgram(noisy)(jnp.asarray(1.5))) == 3.0
     assert any(p.endswith(".none") for p in os.listdir(tmp_path / "programs"))
     assert float(_cache.StoredProgram(noisy)(jnp.asarray(2.5))) == 5.0
+
+
+_RUN = """
+import json, sys, jax.monitoring
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, duration, **kw: traced.append(kw.get("fun_name"))
+    if event.endswith("jaxpr_trace_duration") else None)
+sys.path.insert(0, {root!r})
+sys.path.insert(0, {tests!r})
+from test_speed_cache import _small_run
+from moorjax.dynamics import simulate
+scene, y0, p = _small_run()
+res = simulate(scene, 1.0)
+print(json.dumps(dict(traced=traced, tension=float(res.tension_b[-1, 0]))))
+"""
+
+
+@pytest.mark.slow
+def test_a_new_process_neither_traces_nor_compiles_the_run(tmp_path):
+    """The same structure in a second process: the statics and the integration
+    are loaded from disk (no tracing), and the result is the same."""
+    import json
+
+    env = dict(os.environ, PYTHONPATH=ROOT, MOORJAX_CACHE_DIR=str(tmp_path),
+               MOORJAX_COMPILATION_CACHE="1")
+    code = _RUN.format(root=ROOT, tests=os.path.join(ROOT, "tests"))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                                      text=True, check=True).stdout.strip().splitlines()[-1])
+            for _ in range(2)]
+    assert {"integrate", "_solve_core"} & set(runs[1]["traced"]) == set()
+    assert "flat" in runs[0]["traced"] and "flat" not in runs[1]["traced"]
+    assert runs[0]["tension"] == runs[1]["tension"]
