@@ -148,9 +148,22 @@ def _versions() -> str:
     return ";".join(out)
 
 
+#: packages whose code may be behind a stored program: moorjax's own source is
+#: hashed into the key and the others' versions are; a class from anywhere else
+#: (a user's own motion or load, defined in a script that may change between
+#: processes) makes the structure unstorable, so it is always traced afresh
+TRUSTED = ("moorjax", "diffrax", "equinox", "optimistix", "lineax", "jax", "jaxlib",
+           "numpy", "builtins")
+
+
+def _trusted(kind) -> bool:
+    return kind.__module__.split(".")[0] in TRUSTED
+
+
 def _describe(treedef, out: list) -> bool:
     """Append a text of every node of ``treedef`` (qualified class, static data);
-    False when some static datum has no stable text (an object address)."""
+    False when some static datum has no stable text (an object address) or a
+    node's class is not from :data:`TRUSTED` packages."""
     if treedef.num_nodes == 1 and treedef.num_leaves == 1:
         out.append("*")
         return True
@@ -160,7 +173,7 @@ def _describe(treedef, out: list) -> bool:
         return True
     kind, aux = node
     text = f"{kind.__module__}.{kind.__qualname__}[{aux!r}]("
-    if " at 0x" in text:
+    if " at 0x" in text or not _trusted(kind):
         return False
     out.append(text)
     for child in treedef.children():
@@ -205,7 +218,8 @@ class StoredProgram:
         if not _describe(jax.tree_util.tree_structure(static), parts):
             return None
         static_leaves = [repr(x) for x in jax.tree_util.tree_leaves(static)]
-        if any(" at 0x" in s for s in static_leaves):
+        if any(" at 0x" in s for s in static_leaves) or not all(
+                _trusted(type(x)) for x in jax.tree_util.tree_leaves(static)) or not _trusted(self.fn):
             return None
         if not _describe(in_tree, parts):
             return None

@@ -153,6 +153,7 @@ def _program_fixture():
 def test_stored_program_loads_without_tracing(monkeypatch, tmp_path):
     import jax
 
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
     monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
     monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
     Spring, traces, force, jnp = _program_fixture()
@@ -177,9 +178,20 @@ def test_stored_program_loads_without_tracing(monkeypatch, tmp_path):
     assert float(g) == -3.0
 
 
+def test_code_outside_moorjax_is_never_loaded(monkeypatch, tmp_path):
+    """A user's own class (its code is not in the key) is traced every time."""
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    Spring, traces, force, jnp = _program_fixture()
+    out = _cache.StoredProgram(force)(Spring(jnp.asarray(2.0), 3), jnp.arange(4.0))
+    assert float(out["f"][1]) == -2.0
+    assert not (tmp_path / "programs").exists()
+
+
 def test_stored_program_off_and_unstorable(monkeypatch, tmp_path):
     import jax
 
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
     monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
     Spring, traces, force, jnp = _program_fixture()
     monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "0")
