@@ -215,8 +215,9 @@ def failure_cause(res: SimulationResult, max_steps: int, fixed: bool = False):
         )
     elif fixed and code != diffrax.RESULTS.successful:
         cause = (
-            "Newton did not converge at the fixed step dt (a snap load or slack line "
-            "within one step?): use adaptive steps (no dt) or a smaller dt"
+            "Newton did not converge at the fixed step dt (a snap load, slack line or "
+            "seabed landing within one step?): use adaptive steps (no dt), a smaller dt, "
+            "or retry_failed_steps=True"
         )
     elif code in (
         diffrax.RESULTS.nonlinear_divergence,

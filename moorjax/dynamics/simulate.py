@@ -58,6 +58,7 @@ def simulate(
     progress: bool = False,
     throw: bool = True,
     count_newton: bool = False,
+    retry_failed_steps: bool = False,
 ) -> SimulationResult:
     """Integrate a scene in time.
 
@@ -83,6 +84,10 @@ def simulate(
             implicit methods' Newton iterations.
         dt: fixed step [s] (no error control) — otherwise adaptive, with a PI
             controller (coefficients 0.3/0.4, suited to stiff problems).
+        retry_failed_steps: with ``dt``, retry a step whose Newton solve fails
+            with a quarter of it (steps grow back to ``dt``; no error control).
+            Lets fixed steps pass seabed landings and snap loads: case A at
+            N = 40 completes at dt = 10, 20 and 50 ms (0.79–0.81 % error).
         dt0: first step of the adaptive controller [s] (default: dt_out/10).
         max_steps: step limit.
         save_nodes: also return node positions and segment tensions.
@@ -107,7 +112,7 @@ def simulate(
         duration, ts=ts, dt_out=dt_out, t0=t0, solver=solver, rtol=rtol, atol=atol,
         atol_velocity=atol_velocity, dt=dt, dt0=dt0, max_steps=max_steps,
         save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
-        progress=progress, scene=scene,
+        progress=progress, scene=scene, retry_failed_steps=retry_failed_steps,
     )
     if init is None:
         eq = equilibrium_state(scene, t0)
