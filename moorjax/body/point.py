@@ -123,8 +123,14 @@ class ConnectionPoint(AbstractBody):
         pose, vel, _ = self.split(z)
         f = self._static_force(env)[:3] + mooring[:3]
         u = vel[:3]
+        z_current = self.origin[2] + pose[2]
+        if env is not None and env.waves is not None:  # drag on the wave velocity (MoorDyn's Point)
+            pos = self.origin + pose[:3]
+            eta, u_wave, _ = env.waves.kinematics(pos, t)
+            u = u - u_wave
+            z_current = env.waves.current_height(pos, eta)
         if self.current is not None:
-            u = u - self.current.velocity(self.origin[2] + pose[2], t)
+            u = u - self.current.velocity(z_current, t)
         rho, _ = self._water(env)
         f = f - 0.5 * rho * self.cda * abs_times(u)
         acc = f / (self.mass + self.added)

@@ -30,6 +30,11 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
   ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
   environment's current; line drag acts on the velocity relative to it.
+- Waves (``WaveKin`` 2, 3, 7): the components read from MoorDyn's wave files
+  (:mod:`moorjax.io.waves`) become the environment's :class:`AiryWaves`, summed
+  at the line nodes (drag on the velocity relative to current plus waves, and
+  the water's acceleration) and free points (drag, as MoorDyn's Point, which
+  leaves out the water's acceleration).
 
 - ``SeafloorFile``: the bathymetry grid becomes the seabed's
   :class:`Bathymetry` (contact along the local seabed normal); the
@@ -48,10 +53,13 @@ import numpy as np
 from ..body.point import ConnectionPoint
 from ..model import (
     AddedMass,
+    AiryWaves,
     Bathymetry,
     BodyEnd,
     Environment,
     FixedEnd,
+    GridAiryWaves,
+    IrregularWave,
     Line,
     LinearEA,
     LineType,
@@ -216,7 +224,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             sf = deck.seafloor
             bathymetry = Bathymetry(sf.x, sf.y, sf.z)
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
-    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
+    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck),
+                      waves=deck_waves(deck, float(opts["WtrDpth"]) or depth, g))
     points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
     return Scene(lines, env, bodies=points)
 
@@ -262,3 +271,26 @@ def deck_current(deck: Deck):
     if cur.mode == 1:
         return ProfileCurrent(cur.z, cur.velocity)
     return TimeProfileCurrent(cur.t, cur.z, cur.velocity)
+
+
+def deck_waves(deck: Deck, depth: float, g: float):
+    """The deck's waves as :class:`AiryWaves` of water depth ``depth`` [m] (MoorDyn
+    takes the wave numbers at ``WtrDpth``) and gravity ``g`` [m/s²], or ``None``."""
+    w = deck.waves
+    if w is None:
+        return None
+    if w.grid is not None:
+        outside = [pid for pid in deck.points
+                   if any(not (ax[0] - 1e-9 <= c <= ax[-1] + 1e-9)
+                          for ax, c in zip(w.grid, deck.point_position(pid)[:2]) if ax.shape[0] > 1)]
+        if outside:
+            warnings.warn(
+                f"{deck.path}: WaveKin = {w.mode}: points {outside} lie outside the x/y extent of "
+                "water_grid.txt, where MoorDyn holds the kinematics at the grid's edge; moorjax sums the "
+                "wave components at every node, so the two differ there (widen the grid to compare)",
+                InputWarning, stacklevel=3)
+    wave = IrregularWave(w.omega, w.amplitude, w.phase, w.heading)
+    opts = options_with_defaults(deck)
+    # MoorDyn's wave grids carry the current at the stretched height (UnifyCurrentGrid = 1)
+    kind = GridAiryWaves if w.mode in (2, 3) and float(opts["UnifyCurrentGrid"]) == 1 else AiryWaves
+    return kind(wave, depth, g, w.mean_level)

@@ -75,6 +75,7 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
 @eqx.filter_jit
 def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     from .fem import LineStatics
 
     lt = line.line_type
