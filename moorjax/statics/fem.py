@@ -26,6 +26,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
+from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
@@ -312,7 +313,7 @@ def solve_line_statics(
 METHODS = ("fem", "catenary", "auto")
 
 
-@eqx.filter_jit
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
     """The catenary statics; with ``fallback``, the finite-element solve where it fails."""
     from .exact import catenary_statics
@@ -329,7 +330,7 @@ def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
     return lax.cond(ok, lambda: out, fem)
 
 
-@eqx.filter_jit
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
