@@ -9,18 +9,18 @@ deck. Each is read (:func:`moorjax.io.read_deck`), built
 (:func:`moorjax.io.build_scene`) and solved for its static equilibrium in a
 child process (so that one deck's compilations, crash or time-out cannot touch
 the others): :func:`moorjax.statics.solve_line_statics` per line, or
-:func:`moorjax.statics.solve_system_statics` when the deck has free points.
+:func:`moorjax.statics.solve_system_statics` when the deck has free points or
+free bodies.
 The table gives, per deck, ``runs`` (statics converged: the largest end
 tension and the wall time, compilation included), ``refused`` (the reader's
 or builder's message: what is not supported and where), ``statics (issue 11)``
 (read and built, but the static solve did not converge — the static solver's
 robustness, not the deck) or ``time-out``.
 
-The table printed in the report of the deck work was made with
-``python benchmarks/deck_survey.py /tmp/wtdecks_survey --out survey.md``
-where the folder holds MoorDyn's ``tests/Mooring``, ``bench/Mooring``,
-``example`` (FloatingArrayDesign/MoorDyn 319ff99) and MoorPy's ``tests``,
-``examples`` (NREL/MoorPy 30b7fc4).
+``deck_survey.md`` says how its tables were made: the folder holds MoorDyn's
+``tests/Mooring``, ``bench/Mooring``, ``example`` (FloatingArrayDesign/MoorDyn
+319ff99) under ``MoorDyn/`` and MoorPy's ``tests``, ``examples`` (NREL/MoorPy
+30b7fc4) under ``MoorPy/``.
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ try:
             tens = max(max(float(s.tension_a), float(s.tension_b)) for s in lines)
             if ok:
                 out = {"status": "runs", "reason": f"max end tension {tens:.6g} N",
-                       "n_lines": len(scene.lines), "n_free_points": len(scene.bodies)}
+                       "n_lines": len(scene.lines), "n_free_objects": len(scene.bodies)}
             else:
                 out = {"status": "statics (issue 11)", "reason": "static solve did not converge"}
         except Exception as err:  # the static solver's runtime errors

@@ -71,10 +71,12 @@ QUICK = {
     "moordyn": {"A": [(40, "rk2", 3.125e-3), (20, "rk4", 8.333e-3), (40, "midpoint5", 1.25e-2)],
                 "B": [(10, "rk2", 1.667e-3), (20, "midpoint5", 3.571e-3)]},
     # (N, solver, (rtol, atol) or None, fixed dt or None)
-    "moorjax": {"A": [(40, "kvaerno5", (1e-5, 1e-4), None), (20, "kvaerno3", (1e-5, 1e-4), None),
+    "moorjax": {"A": [(40, "kvaerno5", (1e-5, 1e-4), None), (40, "kvaerno3", (1e-5, 1e-4), None),
+                      (20, "kvaerno3", (1e-5, 1e-4), None),
                       (20, "heun", None, 6.25e-3), (40, "heun", None, 3.125e-3),
                       (20, "implicit_euler", None, 2e-3)],
-                "B": [(20, "kvaerno3", (1e-5, 1e-4), None), (20, "kvaerno5", (1e-6, 1e-5), None),
+                "B": [(10, "kvaerno5", (1e-5, 1e-4), None), (10, "kvaerno3", (1e-5, 1e-4), None),
+                      (20, "kvaerno3", (1e-5, 1e-4), None), (20, "kvaerno5", (1e-6, 1e-5), None),
                       (10, "heun", None, 1.667e-3), (20, "implicit_euler", None, 2e-3)]},
 }
 

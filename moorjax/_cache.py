@@ -15,6 +15,7 @@ The folder may be deleted at any time; JAX refills it.
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 _OFF = ("0", "false", "off", "no")
@@ -53,3 +54,277 @@ def enable_compilation_cache(jax) -> str | None:
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     return path
+
+
+# -- runtime checks without host callbacks -----------------------------------
+#
+# JAX never writes an executable that contains a host callback to the persistent
+# cache. equinox compiles each ``eqx.error_if`` whose predicate is only known at
+# run time into a host callback that raises; diffrax's ``diffeqsolve`` places
+# three of them on its inputs (``(t1 - t0)·dt0 >= 0``, ``saveat.ts`` increasing
+# and within [t0, t1]). moorjax checks exactly these on the host before it
+# integrates (``dynamics.settings.plan`` raises ``ValueError`` naming the
+# setting), so inside its integration they can never fire. equinox's documented
+# switch for what an unresolved check compiles to is ``EQX_ON_ERROR``
+# (``raise``/``nan``/``off``, read once at import into ``equinox._errors``);
+# :func:`host_checked_inputs` selects ``nan`` (a failed check fills the checked
+# value with NaN, no callback) while moorjax traces its integration only, and
+# restores the user's choice afterwards. ``tests/test_speed_cache.py`` pins
+# that a run is then served from the persistent cache in a new process.
+
+def _equinox_errors():
+    try:
+        from equinox import _errors
+    except ImportError:  # pragma: no cover - a future equinox layout
+        return None
+    return _errors if isinstance(getattr(_errors, "EQX_ON_ERROR", None), str) else None
+
+
+@contextlib.contextmanager
+def host_checked_inputs():
+    """While tracing inside this context, equinox runtime checks compile without
+    host callbacks (``EQX_ON_ERROR=nan`` semantics), so the compiled program can
+    be kept in JAX's persistent cache. Use it only around code whose checked
+    inputs were validated on the host; a user who set ``EQX_ON_ERROR=breakpoint``
+    (debugging) keeps it. Nothing changes when equinox's layout differs."""
+    errors = _equinox_errors()
+    if errors is None or errors.EQX_ON_ERROR != "raise":
+        yield
+        return
+    errors.EQX_ON_ERROR = "nan"
+    try:
+        yield
+    finally:
+        errors.EQX_ON_ERROR = "raise"
+
+
+# -- whole programs stored by structure --------------------------------------
+#
+# JAX's persistent cache saves the XLA compile, but a new process still traces
+# the Python program to a jaxpr and lowers it to find the cache key: seconds
+# for a diffrax integration. :class:`StoredProgram` stores the lowered program
+# itself (``jax.export``, StableHLO) under a key made of the inputs' *structure*
+# (pytree layout with its static fields, shapes and dtypes), the moorjax source
+# and the versions of JAX and its libraries; a new process with the same
+# structure loads it (no tracing) and JAX's cache then serves the compile.
+
+
+def programs_dir() -> str:
+    """The folder moorjax keeps exported programs in [path] (beside :func:`cache_dir`)."""
+    return os.path.join(os.path.dirname(cache_dir()), "programs")
+
+
+_SOURCE = []
+
+
+def _source_hash() -> str:
+    """Hash of moorjax's own source files (a changed moorjax never loads an old program)."""
+    if not _SOURCE:
+        import hashlib
+
+        h = hashlib.sha256()
+        root = os.path.dirname(os.path.abspath(__file__))
+        for folder, dirs, files in sorted(os.walk(root)):
+            dirs.sort()
+            for name in sorted(files):
+                if name.endswith(".py"):
+                    path = os.path.join(folder, name)
+                    h.update(os.path.relpath(path, root).encode())
+                    with open(path, "rb") as f:
+                        h.update(f.read())
+        _SOURCE.append(h.hexdigest())
+    return _SOURCE[0]
+
+
+def _versions() -> str:
+    from importlib import metadata
+
+    out = []
+    for dist in ("jax", "jaxlib", "diffrax", "equinox", "optimistix", "lineax"):
+        try:
+            out.append(f"{dist}={metadata.version(dist)}")
+        except metadata.PackageNotFoundError:
+            out.append(f"{dist}=?")
+    return ";".join(out)
+
+
+#: packages whose code may be behind a stored program: moorjax's own source is
+#: hashed into the key and the others' versions are; a class from anywhere else
+#: (a user's own motion or load, defined in a script that may change between
+#: processes) makes the structure unstorable, so it is always traced afresh
+TRUSTED = ("moorjax", "diffrax", "equinox", "optimistix", "lineax", "jax", "jaxlib",
+           "numpy", "builtins")
+
+
+def _trusted(kind) -> bool:
+    return kind.__module__.split(".")[0] in TRUSTED
+
+
+def _describe(treedef, out: list) -> bool:
+    """Append a text of every node of ``treedef`` (qualified class, static data);
+    False when some static datum has no stable text (an object address) or a
+    node's class is not from :data:`TRUSTED` packages."""
+    if treedef.num_nodes == 1 and treedef.num_leaves == 1:
+        out.append("*")
+        return True
+    node = treedef.node_data()
+    if node is None:
+        out.append("*" if treedef.num_leaves else "None")
+        return True
+    kind, aux = node
+    text = f"{kind.__module__}.{kind.__qualname__}[{aux!r}]("
+    if " at 0x" in text or not _trusted(kind):
+        return False
+    out.append(text)
+    for child in treedef.children():
+        if not _describe(child, out):
+            return False
+    out.append(")")
+    return True
+
+
+def _can_serialise() -> bool:
+    """``jax.export`` serialises with the ``flatbuffers`` package."""
+    import importlib.util
+
+    return importlib.util.find_spec("flatbuffers") is not None
+
+
+class StoredProgram:
+    """``eqx.filter_jit(fn)`` whose lowered program is also stored on disk by the
+    structure of its arguments (see above), so that a new process running the
+    same structure neither traces nor lowers ``fn``.
+
+    Falls back to the plain ``filter_jit`` when the cache is off, for traced
+    arguments (under the caller's ``jit``/``grad``/``vmap``), when ``storable``
+    says no (e.g. a program with host callbacks, which ``jax.export`` cannot
+    store), or when the structure has no stable text.
+    """
+
+    def __init__(self, fn, storable=None):
+        import equinox as eqx
+
+        self.fn = fn
+        self.jitted = eqx.filter_jit(fn)
+        self.storable = storable
+        self._programs = {}
+
+    def key(self, in_tree, static, leaves):
+        import hashlib
+
+        import jax
+
+        parts = []
+        if not _describe(jax.tree_util.tree_structure(static), parts):
+            return None
+        static_leaves = [repr(x) for x in jax.tree_util.tree_leaves(static)]
+        if any(" at 0x" in s for s in static_leaves) or not all(
+                _trusted(type(x)) for x in jax.tree_util.tree_leaves(static)) or not _trusted(self.fn):
+            return None
+        if not _describe(in_tree, parts):
+            return None
+        avals = [f"{x.shape}{x.dtype}{int(bool(getattr(x, 'weak_type', False)))}" for x in leaves]
+        text = "\n".join([f"{self.fn.__module__}.{self.fn.__qualname__}", _source_hash(),
+                          _versions(), jax.default_backend(),
+                          str(jax.config.jax_enable_x64), *parts, *static_leaves, *avals])
+        return hashlib.sha256(text.encode()).hexdigest()[:40]
+
+    def __call__(self, *args, **kwargs):
+        import equinox as eqx
+        import jax
+
+        folder = programs_dir() if enabled() and _can_serialise() else None
+        if folder is None or (self.storable is not None and not self.storable(*args, **kwargs)):
+            return self.jitted(*args, **kwargs)
+        dyn, static = eqx.partition((args, kwargs), eqx.is_array)
+        leaves, in_tree = jax.tree_util.tree_flatten(dyn)
+        if any(isinstance(x, jax.core.Tracer) for x in leaves):
+            return self.jitted(*args, **kwargs)
+        key = self.key(in_tree, static, leaves)
+        if key is None:
+            return self.jitted(*args, **kwargs)
+        program = self._programs.get(key) or self._load(folder, key)
+        if program is None:
+            program = self._export(folder, key, in_tree, static, leaves)
+        if program is _UNSTORABLE:
+            return self.jitted(*args, **kwargs)
+        call, out_tree, out_static = program
+        return eqx.combine(jax.tree_util.tree_unflatten(out_tree, call(*leaves)), out_static)
+
+    def _load(self, folder, key):
+        import pickle
+
+        import jax
+
+        path = os.path.join(folder, key)
+        if os.path.exists(path + ".none"):  # tried before: jax.export cannot store it
+            self._programs[key] = _UNSTORABLE
+            return _UNSTORABLE
+        try:
+            with open(path + ".hlo", "rb") as f:
+                exported = jax.export.deserialize(bytearray(f.read()))
+            with open(path + ".tree", "rb") as f:
+                template, out_static = pickle.load(f)
+            out_tree = jax.tree_util.tree_structure(template)
+        except Exception:  # absent, partly written or from another layout: export anew
+            return None
+        program = (jax.jit(exported.call), out_tree, out_static)
+        self._programs[key] = program
+        return program
+
+    def _export(self, folder, key, in_tree, static, leaves):
+        import pickle
+
+        import equinox as eqx
+        import jax
+
+        found = {}
+
+        def flat(*dynamic):
+            args, kwargs = eqx.combine(jax.tree_util.tree_unflatten(in_tree, dynamic), static)
+            out_dyn, out_static = eqx.partition(self.fn(*args, **kwargs), eqx.is_array)
+            out_leaves, found["tree"] = jax.tree_util.tree_flatten(out_dyn)
+            # the outputs' layout is stored as a template (0 for each array):
+            # a pickled PyTreeDef of equinox modules does not load back
+            found["template"] = jax.tree_util.tree_map(lambda _: 0, out_dyn)
+            found["static"] = out_static
+            return out_leaves
+
+        specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
+                 for x in leaves]
+        try:
+            exported = jax.export.export(jax.jit(flat))(*specs)
+            blob = exported.serialize()
+        except Exception as exc:  # e.g. host callbacks: not storable
+            if os.environ.get("MOORJAX_DEBUG_PROGRAMS"):
+                raise
+            del exc
+            self._programs[key] = _UNSTORABLE
+            _write(folder, key + ".none", b"")
+            return _UNSTORABLE
+        program = (jax.jit(exported.call), found["tree"], found["static"])
+        self._programs[key] = program
+        try:
+            meta = pickle.dumps((found["template"], found["static"]))
+        except Exception:  # unpicklable static outputs: keep it in memory only
+            return program
+        _write(folder, key + ".tree", meta)
+        _write(folder, key + ".hlo", blob)  # last: a .hlo is always complete
+        return program
+
+
+#: marks a structure whose program jax.export cannot store (host callbacks)
+_UNSTORABLE = object()
+
+
+def _write(folder, name, data: bytes):
+    """Write a file atomically (a concurrent reader sees all of it or nothing);
+    a read-only or full disk only costs the stored copy."""
+    try:
+        os.makedirs(folder, exist_ok=True)
+        tmp = os.path.join(folder, f"{name}.{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            f.write(data)
+        os.replace(tmp, os.path.join(folder, name))
+    except OSError:
+        pass

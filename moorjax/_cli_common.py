@@ -27,10 +27,11 @@ class HelpFormatter(argparse.RawDescriptionHelpFormatter):
 
 
 def clip(text: str, longest: int = 80) -> str:
-    """``text`` with every token longer than ``longest`` characters shortened."""
+    """``text`` with every token longer than ``longest`` characters shortened; the
+    end of a token (a path's file name and line number) is kept."""
     def short(m):
         tok = m.group(0)
-        return f"{tok[:40]}…[{len(tok) - 50} more characters]…{tok[-10:]}"
+        return f"{tok[:20]}…[{len(tok) - 60} more characters]…{tok[-40:]}"
     text = re.sub(rf"\S{{{longest + 1},}}", short, str(text))
     return text if len(text) <= 2000 else text[:2000] + f"… [{len(text) - 2000} more characters]"
 

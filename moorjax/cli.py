@@ -63,17 +63,25 @@ def cmd_statics(args) -> int:
         # free points and bodies move to their equilibrium with the lines
         from .statics.system import solve_system_statics
 
-        system = solve_system_statics(scene, throw=False)
+        if args.method == "catenary":
+            from .io.errors import InputError
+
+            raise InputError("--method catenary: decks with free points or bodies are solved as a "
+                             "system (catenary lines where they apply); use --method auto or fem")
+        system = solve_system_statics(scene, throw=False, method=args.method)
         if not system.converged:
             raise RuntimeError(
                 "system statics (free points and bodies with their lines) did not converge: "
                 f"force imbalance {float(np.max(np.abs(np.asarray(system.residual)))):.3g} N "
                 f"after {system.iterations} Newton iterations")
         statics = system.lines
+        methods = list(system.methods)
     else:
-        statics = [solve_line_statics(line, scene.env, throw=False) for line in scene.lines]
+        methods = [_statics_method(line, scene.env, args.method) for line in scene.lines]
+        statics = [solve_line_statics(line, scene.env, throw=False, method=m)
+                   for line, m in zip(scene.lines, methods)]
     rows = []
-    for line, st in zip(scene.lines, statics):
+    for line, st, method in zip(scene.lines, statics, methods):
         st = jax.device_get(st)
         if not bool(st.converged):
             raise RuntimeError(
@@ -98,6 +106,7 @@ def cmd_statics(args) -> int:
                 n_segments=line.n_segments,
                 newton_iterations=int(st.iterations),
                 max_residual=float(st.max_residual),
+                method=method,
             )
         )
     if args.json:
@@ -110,6 +119,16 @@ def cmd_statics(args) -> int:
                 f"{r['tension_b']:>14.6g} {r['grounded_length']:>13.4f}"
             )
     return 0
+
+
+def _statics_method(line, env, method: str) -> str:
+    """The statics method a line gets: ``auto`` becomes ``catenary`` where the exact
+    catenary describes the line and has a solution, else ``fem``."""
+    if method != "auto":
+        return method
+    from .statics.exact import catenary_eligible, catenary_solves
+
+    return "catenary" if catenary_eligible(line, env) and catenary_solves(line, env) else "fem"
 
 
 class _CompileTimer:
@@ -218,6 +237,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
     element_option(s)
+    s.add_argument("--method", choices=("auto", "fem", "catenary"), default="auto",
+                   help="auto: the exact elastic catenary where it describes the line (linear "
+                        "element, Hooke's law, negligible EI, no current, flat seabed, a "
+                        "solution exists), else the finite-element equilibrium; fem: always the "
+                        "discrete model's equilibrium (the state a simulation starts from); "
+                        "catenary: the catenary or an error")
     s.add_argument("--json", action="store_true", help="print JSON (one object per line)")
     s.set_defaults(func=cmd_statics)
 

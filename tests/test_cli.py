@@ -222,3 +222,17 @@ def test_bad_segments_rejected_by_parser(capsys, segments):
         main(["statics", "example:oc3_catenary", "--segments", segments])
     assert info.value.code == 2
     assert "positive integer" in capsys.readouterr().err
+
+
+def test_statics_method_auto_is_the_exact_catenary_and_fem_the_discrete_model(capsys):
+    """``--method auto`` (default) reports the exact catenary where it applies, at any
+    segment count; ``--method fem`` the finite-element equilibrium a simulation starts
+    from, whose error against MoorPy falls with the segment count."""
+    (auto,) = run_json(capsys, "example:oc3_catenary", "--segments", "10")
+    (fem,) = run_json(capsys, "example:oc3_catenary", "--segments", "10", "--method", "fem")
+    assert auto["method"] == "catenary" and fem["method"] == "fem"
+    assert auto["tension_b"] == pytest.approx(CASE_A["tension_b"], rel=1e-6)
+    assert auto["tension_a"] == pytest.approx(CASE_A["tension_a"], rel=1e-6)
+    assert auto["grounded_length"] == pytest.approx(CASE_A["grounded"], abs=1e-3)
+    err = abs(fem["tension_b"] / CASE_A["tension_b"] - 1)
+    assert 1e-5 < err < 2e-2  # 10 segments: a visible discretisation error

@@ -72,7 +72,7 @@ def held_run(tmp_path_factory):
 def statics_row():
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        rc = main(["statics", DECK, "--segments", SEGMENTS, "--json"])
+        rc = main(["statics", DECK, "--segments", SEGMENTS, "--method", "fem", "--json"])
     assert rc == 0
     (row,) = json.loads(out.getvalue())
     return row

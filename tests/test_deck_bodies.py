@@ -8,7 +8,8 @@
 - a ``coupled`` body holds its deck pose in statics, and ``moorjax simulate
   --motion`` with its 6-DOF pose columns gives the same run as the deck written
   with coupled points driven along the rigid-body paths;
-- free bodies, coupled-pinned bodies and points on missing bodies are refused
+- a ``free`` body builds a :class:`~moorjax.body.SubmergedBody`;
+- coupled-pinned bodies and points on missing bodies are refused
   with messages naming the item.
 
 The CLI statics share one compilation, the two simulations another (3 lines,
@@ -301,23 +302,28 @@ def test_build_fixed_and_coupled_bodies_place_fixed_ends():
         assert scene.bodies == ()
 
 
-def test_free_body_is_refused_with_the_way_out():
-    deck = read_deck(FREE)  # the deck's values stay readable
-    with pytest.raises(InputError) as info:
-        build_scene(deck)
-    msg = str(info.value)
-    assert msg.startswith(f"{FREE}:{BODY_ROW}: BODIES id 1: Attachment = free: a free body cannot be built")
-    for fragment in ("hydrostatic restoring matrix", "C[2,2]", "added mass", "moorjax.body.RigidBody(",
-                     "moorjax.BodyEnd(0,", "bodies=[body]", "Fixed or Coupled"):
-        assert fragment in msg, fragment
+def test_free_body_builds_a_submerged_body():
+    """Free bodies are built (their physics: ``tests/test_deck_free_body.py``)."""
+    from moorjax.body import SubmergedBody
+    from moorjax.model import BodyEnd
+
+    scene = build_scene(read_deck(FREE), segments=4)
+    (body,) = scene.bodies
+    assert isinstance(body, SubmergedBody)
+    for line, pid in zip(scene.lines, (4, 5, 6)):
+        assert isinstance(line.end_b, BodyEnd) and line.end_b.body == 0
+        np.testing.assert_allclose(body.point_position(np.zeros(6), line.end_b.point),
+                                   _point(POSE0, LOCAL[pid]), atol=1e-12)
 
 
-def test_free_body_cli_exit_code():
+def test_coupled_pinned_body_cli_exit_code(tmp_path):
+    path = tmp_path / "d.dat"
+    path.write_text(FIXED.read_text().replace("1   fixed     2.0", "1   CoupledPinned 2.0"))
     err = io.StringIO()
     with contextlib.redirect_stderr(err):
-        rc = main(["statics", str(FREE), "--json"])
+        rc = main(["statics", str(path), "--json"])
     assert rc == 2
-    assert "BODIES id 1: Attachment = free" in err.getvalue()
+    assert "BODIES id 1: Attachment = coupledpinned" in err.getvalue()
 
 
 def test_coupled_pinned_body_is_refused():

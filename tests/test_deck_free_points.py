@@ -106,6 +106,48 @@ def test_moorpy_case2_free_point_statics_match_moorpy():
         np.testing.assert_allclose(float(s.tension_a), line.TA, rtol=1e-3)  # anchor end on the seabed
 
 
+def test_moorpy_case2_reported_statics_is_the_catenary_system():
+    """``method="auto"`` (what ``moorjax statics`` reports): both lines are exact
+    catenaries, so the free point sits where MoorPy (same g = 9.80665 m/s² as
+    MoorDyn) puts it to 1e-6 m and the tensions agree to 1e-6; ~5 s, against ~40 s for
+    the FEM system above, whose point is 2 cm off at the deck's 25/15 segments."""
+    import moorpy as mp
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ms = mp.System(file=str(CASE2), g=9.80665)
+        ms.initialize()
+        ms.solveEquilibrium(tol=1e-8, maxIter=5000)
+        scene = build_scene(read_deck(CASE2))
+    (free,) = [p for p in ms.pointList if p.type == 0]
+    st = solve_system_statics(scene, method="auto")
+    assert st.converged and st.methods == ("catenary", "catenary")
+    pos = np.asarray(scene.bodies[0].origin + st.poses[0, :3])
+    np.testing.assert_allclose(pos, free.r, atol=1e-6)
+    for line, s in zip(ms.lineList, st.lines):
+        np.testing.assert_allclose(float(s.tension_a), line.TA, rtol=1e-6)
+        np.testing.assert_allclose(float(s.tension_b), line.TB, rtol=1e-6)
+    with pytest.raises(ValueError, match="method must be"):
+        solve_system_statics(scene, method="catenary")
+
+
+def test_point_on_a_slack_weightless_line_settles_at_full_stretch():
+    """MoorDyn's ``lifting.txt``: a 1 t point 100 m under a fixed point on a 100.5 m
+    weightless line (it starts slack: no stiffness at all, a singular Newton matrix).
+    The regularised step moves it along its weight until the line carries it:
+    T = m·g, hanging at 100.5·(1 + mg/EA) m."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(DATA / "public" / "lifting.txt"))
+    st = solve_system_statics(scene, method="fem")
+    assert st.converged
+    weight = 1e3 * 9.80665
+    (line,) = st.lines
+    np.testing.assert_allclose([float(line.tension_a), float(line.tension_b)], weight, rtol=1e-6)
+    z = float(scene.bodies[0].origin[2] + st.poses[0, 2])
+    np.testing.assert_allclose(z, -100.5 * (1 + weight / 1e9), atol=1e-6)
+
+
 @pytest.mark.slow
 def test_free_point_in_dynamic_current_matches_moordyn():
     ref = json.loads((DYN.parent / "moordyn_ref.json").read_text())

@@ -121,3 +121,24 @@ def test_equilibrium_state_vmaps_over_a_body_parameter():
     stacked = mj.ensemble.stack(scenes)
     dz = eqx.filter_vmap(eqx.filter_grad(lambda s: equilibrium_state(s).state[-1][2]))(stacked)
     assert np.all(np.asarray(dz.bodies[0].mass) < 0)
+
+
+def test_fixed_steps_retry_a_failed_newton_step():
+    """Case A's chain landing on the seabed within a 50 ms step: the fixed-step
+    run fails with a message naming the time and the remedy; with
+    ``retry_failed_steps`` it completes and agrees with an adaptive run."""
+    import sys
+
+    sys.path.insert(0, str(ROOT.parent))
+    from benchmarks.common import case_scene
+    from moorjax.dynamics import simulate
+
+    scene = case_scene("A", 10)
+    init = equilibrium_state(scene, 0.0).state
+    with pytest.raises(RuntimeError, match=r"failed at t ≈ .* retry_failed_steps=True"):
+        simulate(scene, 6.0, init=init, dt=0.05)
+    fixed = simulate(scene, 6.0, init=init, dt=0.05, retry_failed_steps=True)
+    assert int(fixed.num_rejected_steps) > 0  # some steps were retried
+    adaptive = simulate(scene, 6.0, init=init)
+    tb, ta = np.asarray(fixed.tension_b[:, 0]), np.asarray(adaptive.tension_b[:, 0])
+    assert np.sqrt(np.mean((tb - ta) ** 2)) < 0.01 * np.std(ta)

@@ -4,6 +4,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from moorjax import _cache
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -45,3 +47,195 @@ def test_import_turns_the_cache_on_and_off(tmp_path):
     off = _cache_dir_after_import({"MOORJAX_CACHE_DIR": str(tmp_path / "x"),
                                    "MOORJAX_COMPILATION_CACHE": "0"})
     assert off == ""
+
+
+# -- the integration is kept in the persistent cache ---------------------------
+
+def _small_run():
+    import equinox as eqx
+
+    import moorjax as mj
+    from moorjax.dynamics.initial import equilibrium_state
+    from moorjax.dynamics.settings import plan
+    from moorjax.dynamics.vector_field import pack
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+
+    scene = build_scene(read_deck(example_path("oc3_catenary")), segments=4)
+    scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene,
+                        mj.SinePath((-5.2, 0.0, -70.0), (1.0, 0.0, 0.0), 10.0))
+    return scene, pack(equilibrium_state(scene, 0.0).state), plan(1.0, scene=scene)
+
+
+def test_integration_compiles_without_host_callbacks():
+    """JAX never caches a program with host callbacks: the compiled integration of
+    host-checked settings has none (diffrax's input checks, which plan() makes on
+    the host, compile to NaN selects), so a new process loads it from the cache."""
+    import equinox as eqx
+    import jax
+
+    from moorjax.dynamics.integrate import integrate
+
+    scene, y0, p = _small_run()
+    assert p.host_checked
+    text = eqx.filter_jit(integrate).lower(scene, y0, p).as_text()
+    assert "callback" not in text
+    # witness: the same lowering shows a runtime check that stays a host callback
+    f = jax.jit(lambda x: eqx.error_if(x, x < 0, "negative"))
+    assert "callback" in f.lower(1.0).as_text()
+
+
+def test_checks_switch_back_after_the_trace():
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from equinox import _errors
+
+    before = _errors.EQX_ON_ERROR
+    with _cache.host_checked_inputs():
+        assert _errors.EQX_ON_ERROR == ("nan" if before == "raise" else before)
+    assert _errors.EQX_ON_ERROR == before
+    # a user's own check outside moorjax's integration still raises
+    f = eqx.filter_jit(lambda x: eqx.error_if(x, x < 0, "negative"))
+    try:
+        f(jnp.asarray(-1.0))
+    except Exception as exc:  # EquinoxRuntimeError / JaxRuntimeError
+        assert "negative" in str(exc)
+    else:
+        raise AssertionError("error_if did not raise")
+
+
+def test_traced_output_times_keep_diffrax_checks():
+    import jax
+
+    from moorjax.dynamics.settings import plan
+
+    flags = []
+
+    def build(ts):
+        flags.append(plan(ts=ts).host_checked)
+        return ts
+
+    jax.jit(build)(jax.numpy.linspace(0.1, 1.0, 4))
+    assert flags == [False]
+    assert plan(1.0).host_checked
+
+
+def test_first_step_must_be_positive():
+    import pytest
+
+    from moorjax.dynamics.settings import plan
+
+    for bad in (-0.01, 0.0, float("nan")):
+        with pytest.raises(ValueError, match="dt0"):
+            plan(1.0, dt0=bad)
+
+
+# -- programs stored by structure (StoredProgram) --------------------------------
+
+def _program_fixture():
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    class Spring(eqx.Module):
+        k: object  # [N/m]
+        n: int = eqx.field(static=True)
+
+    traces = []
+
+    def force(spring, x, *, scale=1.0):
+        traces.append(1)  # runs at trace time only
+        return {"f": -spring.k * x[: spring.n] * scale, "n": spring.n}
+
+    return Spring, traces, force, jnp
+
+
+def test_stored_program_loads_without_tracing(monkeypatch, tmp_path):
+    import jax
+
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    Spring, traces, force, jnp = _program_fixture()
+    x = jnp.arange(4.0)
+    first = _cache.StoredProgram(force)
+    out = first(Spring(jnp.asarray(2.0), 3), x)
+    assert traces == [1] and out["n"] == 3
+    np_out = jax.device_get(out["f"])
+    assert list(np_out) == [-0.0, -2.0, -4.0]
+    assert len([p for p in os.listdir(tmp_path / "programs") if p.endswith(".hlo")]) == 1
+    # "a new process": a fresh wrapper finds the program on disk and never traces
+    again = _cache.StoredProgram(force)
+    out = again(Spring(jnp.asarray(3.0), 3), x)  # other values, same structure
+    assert traces == [1] and list(jax.device_get(out["f"])) == [-0.0, -3.0, -6.0]
+    # another structure (static field, static keyword, shape) is another program
+    again(Spring(jnp.asarray(3.0), 2), x)
+    again(Spring(jnp.asarray(3.0), 3), x, scale=2.0)
+    again(Spring(jnp.asarray(3.0), 3), jnp.arange(5.0))
+    assert traces == [1, 1, 1, 1]
+    # traced arguments (under the caller's transform) use the plain jit
+    g = jax.grad(lambda k: again(Spring(k, 3), x)["f"].sum())(jnp.asarray(1.0))
+    assert float(g) == -3.0
+
+
+def test_code_outside_moorjax_is_never_loaded(monkeypatch, tmp_path):
+    """A user's own class (its code is not in the key) is traced every time."""
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    Spring, traces, force, jnp = _program_fixture()
+    out = _cache.StoredProgram(force)(Spring(jnp.asarray(2.0), 3), jnp.arange(4.0))
+    assert float(out["f"][1]) == -2.0
+    assert not (tmp_path / "programs").exists()
+
+
+def test_stored_program_off_and_unstorable(monkeypatch, tmp_path):
+    import jax
+
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    Spring, traces, force, jnp = _program_fixture()
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "0")
+    _cache.StoredProgram(force)(Spring(jnp.asarray(2.0), 3), jnp.arange(4.0))
+    assert not (tmp_path / "programs").exists()
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+
+    def noisy(x):
+        jax.debug.callback(lambda v: None, x)  # host callbacks cannot be exported
+        return 2 * x
+
+    assert float(_cache.StoredProgram(noisy)(jnp.asarray(1.5))) == 3.0
+    assert any(p.endswith(".none") for p in os.listdir(tmp_path / "programs"))
+    assert float(_cache.StoredProgram(noisy)(jnp.asarray(2.5))) == 5.0
+
+
+_RUN = """
+import json, sys, jax.monitoring
+traced = []
+jax.monitoring.register_event_duration_secs_listener(
+    lambda event, duration, **kw: traced.append(kw.get("fun_name"))
+    if event.endswith("jaxpr_trace_duration") else None)
+sys.path.insert(0, {root!r})
+sys.path.insert(0, {tests!r})
+from test_speed_cache import _small_run
+from moorjax.dynamics import simulate
+scene, y0, p = _small_run()
+res = simulate(scene, 1.0)
+print(json.dumps(dict(traced=traced, tension=float(res.tension_b[-1, 0]))))
+"""
+
+
+@pytest.mark.slow
+def test_a_new_process_neither_traces_nor_compiles_the_run(tmp_path):
+    """The same structure in a second process: the statics and the integration
+    are loaded from disk (no tracing), and the result is the same."""
+    import json
+
+    env = dict(os.environ, PYTHONPATH=ROOT, MOORJAX_CACHE_DIR=str(tmp_path),
+               MOORJAX_COMPILATION_CACHE="1")
+    code = _RUN.format(root=ROOT, tests=os.path.join(ROOT, "tests"))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                                      text=True, check=True).stdout.strip().splitlines()[-1])
+            for _ in range(2)]
+    assert {"integrate", "_solve_core"} & set(runs[1]["traced"]) == set()
+    assert "flat" in runs[0]["traced"] and "flat" not in runs[1]["traced"]
+    assert runs[0]["tension"] == runs[1]["tension"]

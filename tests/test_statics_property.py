@@ -1,5 +1,11 @@
 """Statics converges for every drawn line and agrees with MoorPy's catenary.
 
+Two statics are tested. ``method="auto"`` (what ``moorjax statics`` reports) is the
+line's own equilibrium: the exact elastic catenary where it describes the line,
+the finite-element equilibrium elsewhere; it must agree with MoorPy within 5e-4 at
+any segment count. ``method="fem"`` (the discrete model's equilibrium, where
+dynamics start) must converge for every line; its error is the discretisation's.
+
 Property test over randomly drawn single lines (fixed seed): chain, wire rope,
 polyester and buoyant lines; depths 20–2000 m; grounded (down to H/w below one
 segment), suspended, taut, near-straight (length = span ± 1 cm), both ends above
@@ -36,6 +42,8 @@ SEED = 20261130
 RESOLVED = 30.0
 
 SOLVE = eqx.filter_jit(lambda line, env: solve_line_statics(line, env, throw=False))
+#: what ``moorjax statics`` reports: the exact catenary where it applies, else the FEM
+AUTO = eqx.filter_jit(lambda line, env: solve_line_statics(line, env, throw=False, method="auto"))
 
 
 def _material(rng, kind):
@@ -234,3 +242,84 @@ def test_pile_up_gives_an_answer():
     assert float(st.tension_b) == pytest.approx(c["w"] * 300.0, rel=2.5e-2)
     assert float(st.tension_b) == pytest.approx(tb, rel=2.5e-2)
     assert float(st.tension_a) < 1e-3 * tb
+
+
+# ------------------------------------------------ the reported statics (method="auto")
+
+
+@pytest.mark.parametrize("n", [80, 3, 400])
+def test_reported_statics_agree_with_moorpy_for_every_drawn_line(draws, n):
+    """Every drawn line, every regime, any touchdown sharpness: within 5e-4 of MoorPy's
+    end tensions (measured: 7e-11 worst at 80 segments, 0 fallbacks to the FEM)."""
+    sample = draws if n == 80 else draws[::5]
+    errs = []
+    for i, c in enumerate(sample):
+        line, env = build(c, n)
+        st = AUTO(line, env)
+        assert bool(st.converged), (n, i, c["kind"], c["regime"])
+        errs.append((_errors(c, st)[0], i, c["kind"], c["regime"]))
+        # the nodes lie on the line: unstretched spacing times (1 + strain) apart
+        seg = np.linalg.norm(np.diff(np.asarray(st.positions), axis=0), axis=1)
+        stretch = 1 + np.asarray(st.tensions) / c["ea"]
+        assert np.all(seg <= c["length"] / n * stretch * (1 + 1e-9))
+    worst = max(errs)
+    print(f"\nreported statics at {n} segments: {len(errs)} lines, worst error {worst[0]:.2e}")
+    assert worst[0] < 5e-4, worst
+
+
+def test_reported_statics_falls_back_to_the_fem_where_no_catenary_applies():
+    """Both ends above the bed with a sag that would pass under it (the line rests on
+    the bed in between), and the pile-up: the catenary has no solution there, so the
+    reported statics is the converged FEM equilibrium."""
+    d, m, ea = 0.15, 400.0, 1.5e9
+    c = dict(kind="chain", regime="floating", d=d, m=m, ea=ea, depth=100.0, length=600.0,
+             ra=np.array([0.0, 0.0, -60.0]), rb=np.array([400.0, 0.0, -60.0]))
+    c["w"] = (m - RHO * np.pi * d * d / 4) * G
+    line, env = build(c, 60)
+    st, fem = AUTO(line, env), SOLVE(line, env)
+    assert bool(st.converged)
+    np.testing.assert_allclose(np.asarray(st.positions), np.asarray(fem.positions), atol=1e-9)
+    assert float(np.min(np.asarray(st.positions)[:, 2])) < -99.0  # it does rest on the bed
+    pile = dict(c, ra=np.array([-400.0, 0.0, -300.0]), rb=np.array([0.0, 0.0, 0.0]),
+                depth=300.0, length=890.0)
+    line, env = build(pile, 80)
+    st = AUTO(line, env)
+    assert bool(st.converged)
+    assert float(st.tension_b) == pytest.approx(float(SOLVE(line, env).tension_b), rel=1e-12)
+
+
+def test_reported_statics_keeps_the_fem_for_what_the_catenary_does_not_model():
+    """A current: ``auto`` is the FEM, and
+    ``method="catenary"`` is refused with a message naming what it needs."""
+    c = dict(kind="chain", regime="grounded", d=0.1, m=200.0, ea=8e8, depth=100.0,
+             length=400.0, ra=np.array([-350.0, 0.0, -100.0]), rb=np.array([0.0, 0.0, -10.0]))
+    c["w"] = (c["m"] - RHO * np.pi * c["d"] ** 2 / 4) * G
+    line, env = build(c, 40)
+    env = eqx.tree_at(lambda e: e.current, env, mj.UniformCurrent([0.5, 0.0, 0.0]),
+                      is_leaf=lambda x: x is None)
+    auto, fem = AUTO(line, env), SOLVE(line, env)
+    assert float(auto.tension_b) == float(fem.tension_b)
+    with pytest.raises(ValueError, match="catenary.*LinearEA"):
+        solve_line_statics(line, env, method="catenary")
+    with pytest.raises(ValueError, match="method must be one of"):
+        solve_line_statics(line, env, method="exact")
+
+
+def test_reported_statics_treats_only_a_negligible_bending_stiffness_as_a_cable():
+    """EI = 0.8 N·m² on a chain (MoorDyn decks' placeholder; bending length ~mm) keeps
+    the catenary; a stiff beam (bending length comparable to the line) gets the FEM
+    with bending."""
+    c = dict(kind="chain", regime="grounded", d=0.1, m=200.0, ea=8e8, depth=100.0,
+             length=400.0, ra=np.array([-350.0, 0.0, -100.0]), rb=np.array([0.0, 0.0, -10.0]))
+    c["w"] = (c["m"] - RHO * np.pi * c["d"] ** 2 / 4) * G
+    c["oracle"] = moorpy_oracle(c)
+    line, env = build(c, 20)
+    for ei, exact in ((0.8, True), (5e7, False)):
+        bent = eqx.tree_at(lambda ln: ln.line_type.ei, line, np.float64(ei),
+                           is_leaf=lambda x: x is None)
+        auto, fem = AUTO(bent, env), SOLVE(bent, env)
+        assert bool(auto.converged)
+        if exact:
+            assert _errors(c, auto)[0] < 1e-9
+        else:
+            assert float(auto.tension_b) == float(fem.tension_b)

@@ -101,3 +101,18 @@ def test_beam_simply_supported_length_equal_to_span(extra):
     conv, it, ea, eb, _, _ = res
     assert conv and it < 50
     assert abs(ea) < 2e-4 and abs(eb) < 2e-4, (ea, eb)
+
+
+@pytest.mark.parametrize("name, length", [("MHK_RM1_Floating_MoorDyn.dat", None),
+                                          ("moorpy_case5.dat", 690.0),
+                                          ("moorpy_case9.dat", None)])
+def test_reported_statics_of_the_public_decks_agree_with_moorpy_at_80_segments(name, length):
+    """What ``moorjax statics DECK --segments 80`` reports (``method="auto"``: the exact
+    catenary for these cable lines) agrees with MoorPy within 5e-4 at 80 segments,
+    where the FEM equilibrium above needs 320 on the sharp touchdowns."""
+    lines, env = lines_of(name, 80, length)
+    for line in lines:
+        st = solve_line_statics(line, env, throw=False, method="auto")
+        ta, tb = moorpy(line, env)
+        assert bool(st.converged)
+        assert abs(float(st.tension_a) / ta - 1) < 5e-4 and abs(float(st.tension_b) / tb - 1) < 5e-4

@@ -20,3 +20,4 @@ from .waves import pm_spectrum as pm_spectrum
 from .waves import wave_components as wave_components
 from .waves import wave_loads as wave_loads
 from .point import ConnectionPoint as ConnectionPoint
+from .submerged import SubmergedBody as SubmergedBody

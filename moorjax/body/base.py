@@ -2,7 +2,8 @@
 
 A body is anything in ``Scene.bodies``: a :class:`~moorjax.body.RigidBody` (six
 degrees of freedom, Cummins form) or a :class:`~moorjax.body.ConnectionPoint`
-(a free point mass). Lines attach to it through
+(a free point mass) or a :class:`~moorjax.body.SubmergedBody` (MoorDyn's free
+6-DOF body). Lines attach to it through
 :class:`~moorjax.model.ends.BodyEnd` s; the coupling
 (:mod:`moorjax.body.coupling`) asks it where those points are and how they move,
 and turns the lines' end forces into a wrench on it; the vector field asks it

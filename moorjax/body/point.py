@@ -123,8 +123,14 @@ class ConnectionPoint(AbstractBody):
         pose, vel, _ = self.split(z)
         f = self._static_force(env)[:3] + mooring[:3]
         u = vel[:3]
+        z_current = self.origin[2] + pose[2]
+        if env is not None and env.waves is not None:  # drag on the wave velocity (MoorDyn's Point)
+            pos = self.origin + pose[:3]
+            eta, u_wave, _ = env.waves.kinematics(pos, t)
+            u = u - u_wave
+            z_current = env.waves.current_height(pos, eta)
         if self.current is not None:
-            u = u - self.current.velocity(self.origin[2] + pose[2], t)
+            u = u - self.current.velocity(z_current, t)
         rho, _ = self._water(env)
         f = f - 0.5 * rho * self.cda * abs_times(u)
         acc = f / (self.mass + self.added)
@@ -132,8 +138,15 @@ class ConnectionPoint(AbstractBody):
         return jnp.concatenate([vel[:3], zero, acc, zero])
 
     def mean_load(self, pose, t=0.0, env=None, *, loads: bool = True) -> Array:
-        """The net weight, and the unit rotational stiffness (see :attr:`hydrostatic`)."""
-        return -self.hydrostatic @ pose + self._static_force(env)
+        """The net weight, the unit rotational stiffness (see :attr:`hydrostatic`) and,
+        with ``loads``, the current's drag ½ρ·CdA·|U|U on the point at rest (the
+        current at the point's height at time ``t``)."""
+        f = -self.hydrostatic @ pose + self._static_force(env)
+        if loads and self.current is not None:
+            rho, _ = self._water(env)
+            u = self.current.velocity(self.origin[2] + pose[2], t)
+            f = f.at[:3].add(0.5 * rho * self.cda * abs_times(u))
+        return f
 
     def energy(self, z) -> Array:
         _, vel, _ = self.split(z)

@@ -16,6 +16,10 @@ the sign-preserving product keeps the correct mean Σ_k a_k² D_k when D changes
 sign with frequency. Like the standard form it also contains (spurious)
 sum-frequency terms at ~2ω, which a large moored body filters out.
 
+The components are :class:`moorjax.model.waves.IrregularWave`, the wave model
+the lines share: ``AiryWaves(wave, depth)`` turns the same components into the
+water kinematics at the line nodes (``Environment(..., waves=...)``).
+
 Everything is a pure function of t (JAX-traceable); the random phases are drawn
 once, at construction, with NumPy.
 """
@@ -27,7 +31,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._checks import check_finite, check_nonnegative, check_positive
+from .._checks import check_positive
+from ..model.waves import IrregularWave
 from .hydro import HydroCoefficients, drift_at, excitation_at
 from .loads import AbstractBodyLoad
 
@@ -57,49 +62,6 @@ def _pm_energy(omega, hs, tz):
 def _pm_frequency(energy, hs, tz):
     """Inverse of :func:`_pm_energy`."""
     return ((2 * np.pi) ** 4 / (np.pi * tz**4) / -np.log(energy / (hs**2 / 16))) ** 0.25
-
-
-class IrregularWave(eqx.Module):
-    """A long-crested wave as a sum of components (a regular wave is one).
-
-    η(t) = Σ_k a_k cos(ω_k t + φ_k) at the global origin.
-
-    Args:
-        omega: (n,) frequencies [rad/s] (> 0).
-        amplitude: (n,) amplitudes a_k [m] (≥ 0).
-        phase: (n,) phases φ_k [rad].
-        heading: direction of propagation β [rad], from +x towards +y.
-    """
-
-    omega: Array
-    amplitude: Array
-    phase: Array
-    heading: Array
-
-    def __init__(self, omega, amplitude, phase, heading=0.0):
-        om, a, ph = (jnp.atleast_1d(jnp.asarray(x, dtype=float)) for x in (omega, amplitude, phase))
-        if om.ndim != 1 or a.shape != om.shape or ph.shape != om.shape:
-            raise ValueError(f"wave components need omega, amplitude and phase of one shape (n,); "
-                             f"got {om.shape}, {a.shape}, {ph.shape}")
-        check_positive(om, "wave component frequency", "rad/s")
-        check_nonnegative(a, "wave component amplitude", "m")
-        check_finite(ph, "wave component phase", "rad")
-        check_finite(heading, "wave heading", "rad")
-        self.omega, self.amplitude, self.phase = om, a, ph
-        self.heading = jnp.asarray(heading, dtype=float)
-
-    @property
-    def n_components(self) -> int:
-        return int(self.omega.shape[0])
-
-    def elevation(self, t) -> Array:
-        """η(t) [m] at the origin for times t (…) [s] (memory O(size(t)·n))."""
-        t = jnp.asarray(t, dtype=float)
-        return jnp.cos(t[..., None] * self.omega + self.phase) @ self.amplitude
-
-    def variance(self) -> Array:
-        """Σ a_k²/2 = m0 of the components [m²]."""
-        return 0.5 * jnp.sum(self.amplitude**2)
 
 
 def regular_wave(amplitude, omega, heading=0.0, phase=0.0) -> IrregularWave:
@@ -196,7 +158,11 @@ class WaveLoads(AbstractBodyLoad):
 
 def loads_for_wave(coeffs: HydroCoefficients, wave: IrregularWave, drift: bool = True) -> WaveLoads:
     """:class:`WaveLoads` of ``wave`` on the body of ``coeffs`` (X and D interpolated
-    linearly in heading and ω; every component must lie within the table)."""
+    linearly in heading and ω; every component must lie within the table). The
+    wave must have one heading (a long-crested sea)."""
+    if jnp.ndim(wave.heading) != 0:
+        raise ValueError(f"body wave loads need one wave heading [rad] for all components (a long-crested "
+                         f"sea); got {jnp.shape(wave.heading)} headings: build one WaveLoads per direction")
     x = excitation_at(coeffs, wave.omega, wave.heading)
     a = wave.amplitude[:, None]
     newman = None

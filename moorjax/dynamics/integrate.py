@@ -10,6 +10,7 @@ names the codes.
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import diffrax
@@ -19,6 +20,7 @@ import jax.experimental
 import numpy as np
 from jaxtyping import Array
 
+from .._cache import host_checked_inputs
 from .adjoint import diffrax_adjoint
 from .vector_field import end_outputs, unpack, vector_field
 
@@ -42,6 +44,8 @@ class SimulationResult(eqx.Module):
         num_evaluations: vector-field evaluations (with ``count_newton``).
         body_pose, body_velocity: (k, n_bodies, 6) displacements η [m, rad] and
             velocities η̇ of the scene's floating bodies (``None`` without bodies).
+        velocities: per-line tuple of (k, n+1, 3) node velocities [m/s] with
+            ``positions``, else ``None``.
     """
 
     ts: Array
@@ -60,6 +64,7 @@ class SimulationResult(eqx.Module):
     num_evaluations: Any = None
     body_pose: Any = None
     body_velocity: Any = None
+    velocities: Any = None
 
     def succeeded(self):
         return self.result == diffrax.RESULTS.successful
@@ -103,21 +108,11 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     else:
         saveat = diffrax.SaveAt(ts=s.ts, fn=lambda t, y, args: end_outputs(t, y, args, with_nodes))
     dt0 = None if isinstance(s.controller, diffrax.StepTo) else s.dt0
-    sol = diffrax.diffeqsolve(
-        term,
-        s.solver,
-        s.t0,
-        s.ts[-1],
-        dt0,
-        y0,
-        args=scene,
-        saveat=saveat,
-        stepsize_controller=s.controller,
-        max_steps=s.max_steps,
-        throw=False,
-        progress_meter=s.meter,
-        adjoint=diffrax_adjoint(s, y0),
-    )
+    # plan() checked ts, t0 and dt0 on the host: diffrax's runtime checks of
+    # them then compile without host callbacks (see moorjax._cache)
+    checks = host_checked_inputs() if s.host_checked else contextlib.nullcontext()
+    with checks:
+        sol = _solve(term, s, dt0, y0, scene, saveat)
     if keep_final:
         outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
         cut = lambda a: a[:-1]  # noqa: E731
@@ -141,6 +136,34 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
         result=sol.result,
         body_pose=cut(outs["body_pose"]) if "body_pose" in outs else None,
         body_velocity=cut(outs["body_velocity"]) if "body_velocity" in outs else None,
+        velocities=(tuple(cut(p) for p in outs["velocities"]) if with_nodes else None),
+    )
+
+
+def storable_run(scene, y0, settings, *, count: bool = False, keep_final: bool = True) -> bool:
+    """Whether :func:`integrate` with these arguments compiles to a program that
+    can be stored (``moorjax._cache.StoredProgram``): no host callbacks (no
+    evaluation count, no progress meter) and host-checked settings."""
+    del scene, y0, keep_final
+    return (not count and settings.host_checked
+            and isinstance(settings.meter, diffrax.NoProgressMeter))
+
+
+def _solve(term, s, dt0, y0, scene, saveat):
+    return diffrax.diffeqsolve(
+        term,
+        s.solver,
+        s.t0,
+        s.ts[-1],
+        dt0,
+        y0,
+        args=scene,
+        saveat=saveat,
+        stepsize_controller=s.controller,
+        max_steps=s.max_steps,
+        throw=False,
+        progress_meter=s.meter,
+        adjoint=diffrax_adjoint(s, y0),
     )
 
 
@@ -196,8 +219,9 @@ def failure_cause(res: SimulationResult, max_steps: int, fixed: bool = False):
         )
     elif fixed and code != diffrax.RESULTS.successful:
         cause = (
-            "Newton did not converge at the fixed step dt (a snap load or slack line "
-            "within one step?): use adaptive steps (no dt) or a smaller dt"
+            "Newton did not converge at the fixed step dt (a snap load, slack line or "
+            "seabed landing within one step?): use adaptive steps (no dt), a smaller dt, "
+            "or retry_failed_steps=True"
         )
     elif code in (
         diffrax.RESULTS.nonlinear_divergence,

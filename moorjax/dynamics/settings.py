@@ -44,6 +44,10 @@ class Settings(eqx.Module):
     name: str = eqx.field(static=True)
     adjoint: str = eqx.field(static=True, default="checkpointed")
     checkpoints: int = eqx.field(static=True, default=0)  # reverse mode (0: diffrax's schedule)
+    #: output times, t0 and the first step were checked on the host (not traced):
+    #: diffrax's own runtime checks of them can then compile without host
+    #: callbacks, so the run is kept in the persistent compilation cache
+    host_checked: bool = eqx.field(static=True, default=False)
 
     @property
     def n_steps(self) -> int:
@@ -183,12 +187,15 @@ def plan(
             rtol=rtol_a, atol=atol_a, norm=norm, pcoeff=0.3, icoeff=0.4,
             dtmin=jnp.asarray(_DT_MIN * max(1.0, t_end)), force_dtmin=False,
         )
+        if dt0 is not None and not (np.isfinite(dt0) and dt0 > 0):
+            raise ValueError(f"dt0 = {dt0} s (the first adaptive step) must be > 0")
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
 
     meter = StepMeter() if progress else diffrax.NoProgressMeter()
     return Settings(
         ts, jnp.asarray(float(t0)), solver, controller, jnp.asarray(float(step0)),
         int(max_steps), bool(save_nodes), meter, name, adjoint, int(checkpoints),
+        host_checked=not isinstance(ts, jax.core.Tracer),
     )
 
 

@@ -141,18 +141,20 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
 
     Returns a dict with ``force_a``, ``force_b`` (n_lines, 3) [N], ``tension_a``,
     ``tension_b`` (n_lines,) [N]; with ``with_nodes``, also ``positions`` and
-    ``segment_tensions``: tuples with one (n+1, 3) [m] / (n,) [N] array per line;
+    ``segment_tensions`` (and ``velocities``): tuples with one (n+1, 3) [m] / (n,) [N]
+    (/ (n+1, 3) [m/s]) array per line;
     with bodies, ``body_pose`` and ``body_velocity`` (n_bodies, 6).
     """
-    fa, fb, pos, ten = [], [], [], []
+    fa, fb, pos, ten, vel = [], [], [], [], []
     y_lines, lines, poses, vels = _body_kinematics(y, scene)
     for line, q in zip(lines, y_lines):
         a, b = line.element.state_end_forces(line, scene.env, t, q)
         fa.append(a)
         fb.append(b)
         if with_nodes:
-            r, tension = line.element.state_outputs(line, scene.env, t, q)
+            r, v, tension = line.element.state_outputs(line, scene.env, t, q)
             pos.append(r)
+            vel.append(v)
             ten.append(tension)
     fa, fb = jnp.stack(fa), jnp.stack(fb)
     out = dict(
@@ -166,5 +168,6 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
         out["body_velocity"] = jnp.stack(vels)
     if with_nodes:
         out["positions"] = tuple(pos)
+        out["velocities"] = tuple(vel)
         out["segment_tensions"] = tuple(ten)
     return out

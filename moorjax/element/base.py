@@ -67,11 +67,12 @@ class AbstractElement(eqx.Module):
         return self.end_forces(line, env, r, v, t)
 
     def state_outputs(self, line, env, t, q):
-        """Node positions (n+1, 3) [m] and segment tensions (n,) [N] from the packed state."""
+        """Node positions (n+1, 3) [m], velocities (n+1, 3) [m/s] and segment
+        tensions (n,) [N] from the packed state."""
         from ..model.line import LineState
 
         r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
-        return r, self.segment_tensions(line, r, v)
+        return r, v, self.segment_tensions(line, r, v)
 
     def unpack_state(self, line, q):
         """The packed state q as the element's state pytree (a ``LineState`` here)."""

@@ -144,6 +144,9 @@ def _distributed_load(line, env, r, d1, t, v=None):
                 uh = v[..., :2]
                 speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
                 q = q.at[..., :2].add(-(fr.mu * normal / speed)[..., None] * uh)
+    if env.waves is not None:
+        raise ValueError("HermiteElement: wave kinematics (Environment.waves) are not supported yet; "
+                         "use LinearElement for lines in waves")
     if lt.drag is not None and (env.current is not None or v is not None):
         u = jnp.zeros_like(r) if v is None else v
         if env.current is not None:

@@ -221,15 +221,16 @@ def end_forces(line, env, t, q):
 
 
 def outputs(line, env, t, q):
-    """Node positions (n+1, 3) [m] and the effective tension at element midpoints (n,) [N]."""
+    """Node positions (n+1, 3) [m], velocities (n+1, 3) [m/s] and the effective
+    tension at element midpoints (n,) [N]."""
     n, h = line.n_segments, line.segment_length
-    u, _ = _nodes(line, t, q)
+    u, ud = _nodes(line, t, q)
     dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
     dofs, tension = line.element.tension.resolve(line, dofs)
     if tension is None:
-        return dofs.r, dofs.lam[1::2]
+        return dofs.r, ud[0::2], dofs.lam[1::2]
     # midpoint of the element: the middle Gauss point (ξ = ½ for 5 points)
-    return dofs.r, tension[0][:, 2]
+    return dofs.r, ud[0::2], tension[0][:, 2]
 
 
 def static_state(line, dofs: HermiteDofs) -> HermiteState:

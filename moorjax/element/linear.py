@@ -7,9 +7,14 @@ unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on th
 - elastic and internal damping: T_j = law(e_j) + BA·ė_j along t_j (Eq. 2/7, f_r);
 - gravity and buoyancy: the wet weight w = (m − ρA)g per unstretched length,
   w·l/2 from each adjacent element (f_hg, whose (1+e) factors cancel);
-- Morison drag on the velocity relative to the current, per adjacent element half
-  (stretched length ℓ_j/2), split on t_j into axial and normal parts (Eq. 7, f_dt,
-  f_dn);
+- Morison drag on the velocity relative to the water (current plus wave particle
+  velocity), per adjacent element half (stretched length ℓ_j/2), split on t_j into
+  axial and normal parts (Eq. 7, f_dt, f_dn);
+- with waves (``env.waves``), the water's acceleration a_w at each node loads it
+  through each adjacent element half: ρA(ℓ_j/2)·[(1 + Ca_n)·a_n + (1 + Ca_ax)·a_t]
+  with a_t = (a_w·t_j)t_j, a_n = a_w − a_t (Froude–Krylov plus the added-mass part,
+  MoorDyn v2's line force ``Ap``/``Aq`` in ``source/Line.cpp``; Ca = 0 without
+  ``added_mass``);
 - seabed contact on nodes below z = −depth (MoorDyn's vertical spring–damper on
   d·l_node), with optional smoothed friction;
 - bending, when the line type has ``ei``: the curvature at each interior node k
@@ -19,7 +24,7 @@ unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on th
   energy ½·EI·κ²·l per node; forces are minus its gradient. End nodes carry no
   moment (pinned ends).
 
-Absent structure (no drag, no seabed, no current) is never traced.
+Absent structure (no drag, no seabed, no current, no waves) is never traced.
 """
 
 from __future__ import annotations
@@ -84,8 +89,20 @@ class LinearElement(AbstractElement):
         weight = lt.wet_weight(env.rho, env.g)
         force = force.at[:, 2].add(-weight * node_len)
 
+        wave_u = wave_a = None
+        z_current = r[:, 2]
+        if env.waves is not None:
+            eta, wave_u, wave_a = env.waves.kinematics(r, t)
+            z_current = env.waves.current_height(r, eta)
+            force = force + _to_nodes(
+                _fluid_inertia(lt, env, wave_a[:-1], tangent, stretched),
+                _fluid_inertia(lt, env, wave_a[1:], tangent, stretched),
+            )
+
         if lt.drag is not None:
-            u = v if env.current is None else v - env.current.velocity(r[:, 2], t)
+            u = v if env.current is None else v - env.current.velocity(z_current, t)
+            if wave_u is not None:
+                u = u - wave_u
             force = force + _to_nodes(
                 _drag(lt, env, u[:-1], tangent, stretched),
                 _drag(lt, env, u[1:], tangent, stretched),
@@ -138,6 +155,17 @@ def _drag(lt, env, u, tangent, stretched):
     cn = 0.5 * env.rho * drag.cd_normal * lt.diameter
     ca = 0.5 * env.rho * drag.cd_axial * jnp.pi * lt.diameter
     return -(0.5 * stretched)[:, None] * (cn * abs_times(un) + ca * abs_times(ut))
+
+
+def _fluid_inertia(lt, env, a, tangent, stretched):
+    """Froude–Krylov and added-mass load of the water's acceleration ``a`` (n, 3)
+    [m/s²] on one node from one adjacent element half: (n, 3) [N]."""
+    at = jnp.sum(a * tangent, axis=-1, keepdims=True) * tangent
+    an = a - at
+    ca_n = ca_t = 0.0
+    if lt.added_mass is not None:
+        ca_n, ca_t = lt.added_mass.ca_normal, lt.added_mass.ca_axial
+    return (env.rho * lt.area * 0.5 * stretched)[:, None] * ((1.0 + ca_n) * an + (1.0 + ca_t) * at)
 
 
 def _seabed(lt, env, r, v, node_len):

@@ -30,6 +30,11 @@ MoorDyn conventions kept (so a deck means the same in both codes):
 - Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
   ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
   environment's current; line drag acts on the velocity relative to it.
+- Waves (``WaveKin`` 2, 3, 7): the components read from MoorDyn's wave files
+  (:mod:`moorjax.io.waves`) become the environment's :class:`AiryWaves`, summed
+  at the line nodes (drag on the velocity relative to current plus waves, and
+  the water's acceleration) and free points (drag, as MoorDyn's Point, which
+  leaves out the water's acceleration).
 
 - ``SeafloorFile``: the bathymetry grid becomes the seabed's
   :class:`Bathymetry` (contact along the local seabed normal); the
@@ -46,12 +51,16 @@ import warnings
 import numpy as np
 
 from ..body.point import ConnectionPoint
+from ..body.submerged import SubmergedBody
 from ..model import (
     AddedMass,
+    AiryWaves,
     Bathymetry,
     BodyEnd,
     Environment,
     FixedEnd,
+    GridAiryWaves,
+    IrregularWave,
     Line,
     LinearEA,
     LineType,
@@ -105,22 +114,6 @@ def read_deck_motion(path, deck: Deck) -> Motion:
 
 def _check_body_supported(deck: Deck, body: DeckBody) -> None:
     where = f"{deck.path}:{body.source_line}: BODIES id {body.id}"
-    if body.attachment == "free":
-        raise InputError(
-            f"{where}: Attachment = free: a free body cannot be built from a MoorDyn deck yet: "
-            "moorjax lacks MoorDyn's submerged 6-DOF body (weight at the CG and buoyancy rho*V*g "
-            "at the reference point with their moments at any rotation, per-DOF drag "
-            "0.5*rho*CdA*|v|v in body axes on the velocity relative to the water, added mass "
-            "rho*V*Ca, and the inertia of the points and line ends fixed in it). "
-            "moorjax's moving body, moorjax.body.RigidBody, is a floating (Cummins-form) body: it "
-            "needs a hydrostatic restoring matrix with positive heave stiffness C[2,2] [N/m] and "
-            "added mass [kg], which a deck does not carry (it gives Mass, CG, I, Volume, CdA, Ca "
-            "only). Build it in Python instead: body = moorjax.body.RigidBody(mass, inertia, "
-            "hydrostatic=C, added_mass=A, origin=<centre of gravity [m]>), end each line on "
-            "moorjax.BodyEnd(0, <fairlead in body axes relative to the centre of gravity [m]>) and "
-            "simulate moorjax.Scene(lines, env, bodies=[body]); read_deck(...).bodies and .points "
-            "give the deck's values. Or make the body Fixed or Coupled in the deck."
-        )
     if body.attachment == "coupled_pinned":
         raise InputError(
             f"{where}: Attachment = coupledpinned: bodies with a prescribed position and free "
@@ -163,7 +156,7 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
 
     Raises:
         InputError: bad ``segments``, no water depth, or a body kind that cannot
-            be built (``free``, ``coupledpinned``).
+            be built (``coupledpinned``).
     """
     if segments is not None and (int(segments) != segments or segments < 1):
         raise InputError(f"--segments = {segments} must be an integer >= 1")
@@ -186,10 +179,14 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             )
 
     free_ids = [p.id for p in deck.points.values() if p.attachment == "free"]
+    free_bodies = [b.id for b in deck.bodies.values() if b.attachment == "free"]
     ends = {}
     for p in deck.points.values():
         if p.attachment == "free":
             ends[p.id] = BodyEnd(free_ids.index(p.id), (0.0, 0.0, 0.0), p.position)
+        elif p.body is not None and p.body in free_bodies:
+            ends[p.id] = BodyEnd(len(free_ids) + free_bodies.index(p.body), p.position,
+                                 deck.bodies[p.body].position)
         elif p.body is not None:
             ends[p.id] = _body_point_end(deck, p, motion)
         elif p.attachment == "coupled" and motion is not None and p.id in motion.positions:
@@ -200,6 +197,12 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
     lines, weights = [], []
     for dl in deck.lines:
         n = int(segments) if segments is not None else dl.n_segments
+        if n < 2:
+            where = "--segments 1" if segments is not None else (
+                f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1")
+            raise InputError(
+                f"{where}: a line of one segment has no free node, which moorjax's static and "
+                "implicit solvers do not support yet; give NumSegs >= 2 (or --segments N >= 2)")
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
@@ -216,9 +219,11 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             sf = deck.seafloor
             bathymetry = Bathymetry(sf.x, sf.y, sf.z)
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
-    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck))
+    env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck),
+                      waves=deck_waves(deck, float(opts["WtrDpth"]) or depth, g))
     points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
-    return Scene(lines, env, bodies=points)
+    bodies = [_free_body(deck, deck.bodies[i], lines, rho, g, env.current) for i in free_bodies]
+    return Scene(lines, env, bodies=points + bodies)
 
 
 def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) -> ConnectionPoint:
@@ -249,6 +254,61 @@ def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) 
                            current=current if p.cda > 0 else None)
 
 
+def _end_node_inertia(deck: Deck, point_id: int, lines, rho: float) -> np.ndarray:
+    """(3, 3) inertia [kg] of the end nodes of the lines on point ``point_id``:
+    half an element's mass μ·l/2 and its added mass ρ·A·(l/2)·(Ca_n·(I − qqᵀ) +
+    Ca_t·qqᵀ), q along the line's chord at the deck's geometry (MoorDyn takes the
+    line's current end tangent)."""
+    out = np.zeros((3, 3))
+    for line, dl in zip(lines, deck.lines):
+        for end, other in (("a", dl.point_b), ("b", dl.point_a)):
+            if getattr(dl, f"point_{end}") != point_id:
+                continue
+            lt = line.line_type
+            half = 0.5 * float(line.segment_length)
+            out += float(lt.mass_per_length) * half * np.eye(3)
+            if lt.added_mass is not None:
+                chord = np.subtract(deck.point_position(other), deck.point_position(point_id))
+                q = chord / max(np.linalg.norm(chord), 1e-300)
+                qq = np.outer(q, q)
+                ca_n, ca_t = float(lt.added_mass.ca_normal), float(lt.added_mass.ca_axial)
+                out += rho * float(lt.area) * half * (ca_n * (np.eye(3) - qq) + ca_t * qq)
+    return out
+
+
+def _free_body(deck: Deck, body: DeckBody, lines, rho: float, g: float, current) -> SubmergedBody:
+    """A deck's free body as a :class:`~moorjax.body.SubmergedBody` (MoorDyn's free Body).
+
+    MoorDyn's body: Mass at CG with inertia I about it (body axes), weight and
+    buoyancy ρ·V·g both at the CG, drag ½ρ·CdA·|u|u in body axes on the
+    velocity relative to the water at the reference point, added mass ρ·V·Ca
+    in translation. Its points add their Mass (weighed), Volume (buoyant) and
+    Ca·ρ·V, and the end nodes of their lines (inertia only: the lines' end
+    forces carry their weight). A point's own CdA on a body is not modelled
+    (a warning says so).
+    """
+    where = f"{deck.path}:{body.source_line}: BODIES id {body.id}"
+    pts = [p for p in deck.points.values() if p.body == body.id]
+    for p in pts:
+        if p.cda > 0:
+            warnings.warn(f"{deck.path}:{p.source_line}: POINTS id {p.id}: CdA = {p.cda} m^2 of a "
+                          f"point fixed in free body {body.id} is ignored (moorjax models the "
+                          "body's own CdA only)", InputWarning, stacklevel=3)
+    fixtures = (np.array([p.position for p in pts]).reshape(-1, 3),
+                np.array([p.mass for p in pts]),
+                np.array([p.volume for p in pts]),
+                np.array([p.ca * rho * p.volume * np.eye(3) + _end_node_inertia(deck, p.id, lines, rho)
+                          for p in pts]).reshape(-1, 3, 3))
+    try:
+        return SubmergedBody(body.mass, body.position, orientation=np.radians(body.orientation),
+                             cg=body.cg, inertia=body.inertia, volume=body.volume, cda=body.cda,
+                             ca=body.ca, fixtures=fixtures, rho=rho, g=g,
+                             current=current if any(c > 0 for c in body.cda[:3]) else None,
+                             label=f"B{body.id}")
+    except ValueError as err:
+        raise InputError(f"{where}: {err}") from None
+
+
 def deck_current(deck: Deck):
     """The deck's current as a moorjax current field, or ``None``.
 
@@ -262,3 +322,26 @@ def deck_current(deck: Deck):
     if cur.mode == 1:
         return ProfileCurrent(cur.z, cur.velocity)
     return TimeProfileCurrent(cur.t, cur.z, cur.velocity)
+
+
+def deck_waves(deck: Deck, depth: float, g: float):
+    """The deck's waves as :class:`AiryWaves` of water depth ``depth`` [m] (MoorDyn
+    takes the wave numbers at ``WtrDpth``) and gravity ``g`` [m/s²], or ``None``."""
+    w = deck.waves
+    if w is None:
+        return None
+    if w.grid is not None:
+        outside = [pid for pid in deck.points
+                   if any(not (ax[0] - 1e-9 <= c <= ax[-1] + 1e-9)
+                          for ax, c in zip(w.grid, deck.point_position(pid)[:2]) if ax.shape[0] > 1)]
+        if outside:
+            warnings.warn(
+                f"{deck.path}: WaveKin = {w.mode}: points {outside} lie outside the x/y extent of "
+                "water_grid.txt, where MoorDyn holds the kinematics at the grid's edge; moorjax sums the "
+                "wave components at every node, so the two differ there (widen the grid to compare)",
+                InputWarning, stacklevel=3)
+    wave = IrregularWave(w.omega, w.amplitude, w.phase, w.heading)
+    opts = options_with_defaults(deck)
+    # MoorDyn's wave grids carry the current at the stretched height (UnifyCurrentGrid = 1)
+    kind = GridAiryWaves if w.mode in (2, 3) and float(opts["UnifyCurrentGrid"]) == 1 else AiryWaves
+    return kind(wave, depth, g, w.mean_level)

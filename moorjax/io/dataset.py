@@ -17,7 +17,15 @@ variable                  dimensions                       units
 ``body_pose``             time, body, dof                  m, rad
 ``n_segments``            line                             1
 ``unstretched_length``    line                             m
+``free_pose``             time, free, dof                  m, rad
+``line_outputs``          line                             —
 ========================  ===============================  =====
+
+With a deck: ``free_pose`` is the global pose of its free points and free
+bodies (reference point, MoorDyn's roll, pitch, yaw; labels ``P<id>``/``B<id>``),
+and the ``LineOutputs`` each line asks for (``line_outputs``: the flags
+written) add the variables of :mod:`moorjax.io.line_outputs` (NaN for lines
+that did not ask).
 
 Node and segment variables exist when the run saved nodes
 (``simulate(..., save_nodes=True)``); lines with fewer segments than the
@@ -82,6 +90,28 @@ def body_loads(deck, scene, motion, res, body_id) -> np.ndarray:
 
 def _label(text):
     return int(text) if str(text).isdigit() else str(text)
+
+
+def _add_line_outputs(data, coords, res, scene, deck):
+    """The deck's ``LineOutputs`` (:mod:`moorjax.io.line_outputs`)."""
+    import warnings
+
+    from .line_outputs import line_output_variables, split_flags
+
+    flags = {j: split_flags(dl.outputs)[0] for j, dl in enumerate(deck.lines)}
+    if not any(flags.values()):
+        return
+    if res.positions is None:
+        warnings.warn("the deck's LineOutputs need the run's nodes; they are not written "
+                      "(run without --no-nodes / with save_nodes=True)", stacklevel=3)
+        return
+    data["line_outputs"] = (("line",), np.array([flags.get(j, "") for j in range(len(scene.lines))]),
+                            dict(long_name="LineOutputs flags written (MoorDyn's letters)"))
+    if "segment" not in coords:
+        n_max = max(ln.n_segments for ln in scene.lines)
+        coords["segment"] = ("segment", np.arange(n_max), dict(long_name="segment index (0 at end A)"))
+    for name, (dims, arr, units, long_name) in line_output_variables(res, scene, flags).items():
+        data[name] = _var(dims, arr, units, long_name)
 
 
 def to_dataset(res, scene, *, deck=None, motion=None, attrs=None):
@@ -165,6 +195,21 @@ def to_dataset(res, scene, *, deck=None, motion=None, attrs=None):
                                        "moment of the lines about the body's reference point")
             data["body_position"] = _var(("time", "body", "axis"), pos, "m",
                                          "position of the body's reference point")
+        if res.body_pose is not None:
+            from ..body.submerged import SubmergedBody
+
+            pose = np.array(res.body_pose, dtype=float)
+            for i, b in enumerate(scene.bodies):
+                pose[:, i, :3] += np.asarray(b.origin)
+                if isinstance(b, SubmergedBody):
+                    pose[:, i, 3:] += np.asarray(b.orientation)
+            coords["free"] = ("free", [str(b.label) for b in scene.bodies],
+                              dict(long_name="free point (P<id>) or free body (B<id>) of the deck"))
+            coords["dof"] = ("dof", list(DOF), dict(long_name="degree of freedom"))
+            data["free_pose"] = _var(("time", "free", "dof"), pose, "m, m, m, rad, rad, rad",
+                                     "global pose: reference point x, y, z and MoorDyn's roll, "
+                                     "pitch, yaw (R = Rx Ry Rz)")
+        _add_line_outputs(data, coords, res, scene, deck)
     elif res.body_pose is not None:
         coords["body"] = ("body", np.arange(len(scene.bodies)),
                           dict(long_name="body index in the scene",

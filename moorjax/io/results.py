@@ -11,7 +11,11 @@
 
   Readers that skip ``#`` lines (``numpy.loadtxt``/``genfromtxt``, pandas with
   ``comment="#"``, ``moorjax fit --target``) see the columns of earlier versions.
-  Node positions do not fit a flat table and are only in netCDF.
+  Node positions do not fit a flat table and are only in netCDF, except
+  for the lines whose deck ``LineOutputs`` ask for them (columns
+  ``L<id>_Node<i>_px``, ``L<id>_Seg<i>_Te``, ...: :mod:`moorjax.io.line_outputs`).
+  With a deck, free points and free bodies add their global pose
+  (``P<id>_x``..., ``B<id>_x``... ``B<id>_yaw``).
 
 :func:`check_output` validates a path before any work is done.
 """
@@ -22,6 +26,7 @@ import os
 
 import numpy as np
 
+from .line_outputs import csv_line_columns
 from .table import read_table
 
 SUFFIXES = (".nc", ".csv")
@@ -60,7 +65,13 @@ def csv_columns(ds):
             for var, sym, unit in (("body_force", "F", "N"), ("body_moment", "M", "N*m")):
                 for i, c in enumerate("xyz"):
                     cols.append((f"B{bid}_{sym}{c}", unit, ds[var].sel(body=bid).values[:, i]))
-    return cols
+    if "free_pose" in ds:
+        for label in ds["free"].values:
+            dofs = 3 if str(label).startswith("P") else 6
+            for i, name in enumerate(("x", "y", "z", "roll", "pitch", "yaw")[:dofs]):
+                cols.append((f"{label}_{name}", "m" if i < 3 else "rad",
+                             ds["free_pose"].sel(free=label).values[:, i]))
+    return cols + csv_line_columns(ds)
 
 
 def write_csv(ds, path) -> None:
@@ -83,6 +94,11 @@ def write_results(ds, path, nodes=True) -> None:
     leaves node positions and segment tensions out of netCDF)."""
     if not nodes:
         ds = ds.drop_vars([v for v in ("node_position", "segment_tension") if v in ds])
+        if "line_outputs" in ds and "p" in "".join(map(str, ds["line_outputs"].values)):
+            import warnings
+
+            warnings.warn("the deck's LineOutputs p (node positions) are not written without nodes",
+                          stacklevel=2)
     if str(path).lower().endswith(".nc"):
         write_netcdf(ds, path)
     else:

@@ -26,17 +26,24 @@ from .line_type import AddedMass as AddedMass
 from .line_type import LineType as LineType
 from .line_type import MorisonDrag as MorisonDrag
 from .scene import Scene as Scene
+from .waves import AiryWaves as AiryWaves
+from .waves import GridAiryWaves as GridAiryWaves
+from .waves import IrregularWave as IrregularWave
+from .waves import wave_number as wave_number
 
 __all__ = [
     'AbstractAxialLaw',
     'AbstractCurrent',
     'AbstractEnd',
     'AddedMass',
+    'AiryWaves',
     'Bilateral',
     'Environment',
     'Bathymetry',
     'BodyEnd',
     'FixedEnd',
+    'GridAiryWaves',
+    'IrregularWave',
     'KinematicEnd',
     'Line',
     'LineState',
@@ -54,4 +61,5 @@ __all__ = [
     'TabulatedEA',
     'TabulatedPath',
     'UniformCurrent',
+    'wave_number',
 ]

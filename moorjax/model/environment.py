@@ -1,8 +1,8 @@
-"""The water the lines live in: depth, density, gravity, seabed and current.
+"""The water the lines live in: depth, density, gravity, seabed, current and waves.
 
 Axes: z up, z = 0 at the free surface, the seabed at z = −depth.
-``seabed`` and ``current`` are optional structure: a scene without them never
-traces contact or current terms.
+``seabed``, ``current`` and ``waves`` are optional structure: a scene without
+them never traces contact, current or wave terms.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._checks import check_finite, check_nonnegative, check_positive
+from .waves import AiryWaves
 
 
 class SeabedFriction(eqx.Module):
@@ -251,23 +252,40 @@ class TimeProfileCurrent(AbstractCurrent):
 
 class Environment(eqx.Module):
     """Water depth [m], density ρ [kg/m³] (≥ 0; 0 is air), gravity g [m/s²]
-    (≥ 0), optional seabed/current."""
+    (≥ 0), optional seabed, current and waves.
+
+    ``waves`` (:class:`moorjax.model.waves.AiryWaves`) adds the wave particle
+    velocity to the current in the line drag and loads the lines with the
+    water's acceleration (Froude–Krylov and added-mass parts). Statics solve
+    the mean state without them (:meth:`without_waves`), as MoorDyn's initial
+    condition does.
+    """
 
     depth: Array
     rho: Array
     g: Array
     seabed: Seabed | None
     current: AbstractCurrent | None
+    waves: AiryWaves | None = None
 
     def __init__(self, depth, rho=1025.0, g=9.80665, seabed: Seabed | None = None,
-                 current: AbstractCurrent | None = None):
+                 current: AbstractCurrent | None = None, waves: AiryWaves | None = None):
         check_positive(depth, "water depth", "m")
         # zero is allowed, as in MoorDyn: rho = 0 is a line in air (no buoyancy,
         # drag or added mass), g = 0 a weightless system
         check_nonnegative(rho, "water density", "kg/m³")
         check_nonnegative(g, "gravity", "m/s²")
+        if waves is not None and not isinstance(waves, AiryWaves):
+            raise ValueError(f"waves must be an AiryWaves (moorjax.model.waves), got {type(waves).__name__}")
         self.depth = jnp.asarray(depth, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
         self.g = jnp.asarray(g, dtype=float)
         self.seabed = seabed
         self.current = current
+        self.waves = waves
+
+    def without_waves(self) -> "Environment":
+        """The same water without waves: the mean state that statics solve for."""
+        if self.waves is None:
+            return self
+        return eqx.tree_at(lambda e: e.waves, self, None, is_leaf=lambda x: x is None)

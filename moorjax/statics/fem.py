@@ -28,6 +28,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array
 
+from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
@@ -254,8 +255,24 @@ def solve_line_statics(
     atol: float = ATOL,
     max_steps: int = MAX_STEPS,
     throw: bool = True,
+    method: str = "fem",
 ) -> LineStatics:
     """Static equilibrium of one line with its ends where they are at time t.
+
+    Two answers exist for a line of n segments, and ``method`` chooses:
+
+    * ``"fem"`` (default): the equilibrium of the discrete (lumped-mass) model,
+      the state dynamics start from (:meth:`LineStatics.state`). Its end tensions
+      carry the discretisation error, largest where the touchdown kink is sharper
+      than a segment (H/w below a few tens of segment lengths).
+    * ``"catenary"``: the exact elastic catenary of the continuous line sampled at
+      the nodes (:mod:`moorjax.statics.exact`); only for lines it describes
+      exactly (Hooke's law, no current, flat seabed; a bending length √(EI/H)
+      under 1e-4 of the length) and geometries where it has a solution, else
+      ``ValueError`` / not converged.
+    * ``"auto"``: ``"catenary"`` where it applies, else ``"fem"`` — the line's
+      statics to the solver's precision whatever the segment count; what
+      ``moorjax statics`` reports.
 
     Args:
         line, env: the line and its environment.
@@ -272,12 +289,24 @@ def solve_line_statics(
     """
     check_geometry(line, env, t)
     from ..element.hermite import HermiteElement
+    from .exact import catenary_eligible
 
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    eligible = catenary_eligible(line, env)
+    if method == "catenary" and not eligible:
+        raise ValueError(
+            f"line {line.label}: method='catenary' needs a linear element with Hooke's law "
+            "(LinearEA), no current and a flat seabed; use method='fem' or 'auto'")
+    t = jnp.asarray(t, dtype=float)
     if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field
         from .hermite import hermite_statics_core as core
     else:
         core = _solve_core
-    out = core(line, env, jnp.asarray(t, dtype=float), init, rtol, atol, max_steps)
+    if method == "fem" or not eligible:
+        out = core(line, env, t, init, rtol, atol, max_steps)
+    else:
+        out = _exact_core(line, env, t, init, rtol, atol, max_steps, method == "auto")
     if throw:
         out = eqx.error_if(
             out,
@@ -289,9 +318,31 @@ def solve_line_statics(
     return out
 
 
-@eqx.filter_jit
+#: The choices of :func:`solve_line_statics`'s ``method``.
+METHODS = ("fem", "catenary", "auto")
+
+
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
+def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
+    """The catenary statics; with ``fallback``, the finite-element solve where it fails."""
+    from .exact import catenary_statics
+
+    out, ok = catenary_statics(line, env, t)
+    if not fallback:
+        return out
+
+    def fem():
+        return _solve_core(line, env, t, init, rtol, atol, max_steps)
+
+    like = jax.eval_shape(fem)
+    out = jax.tree.map(lambda a, b: jnp.asarray(a, b.dtype), out, like)
+    return lax.cond(ok, lambda: out, fem)
+
+
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
+    env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     r0 = initial_guess(line, env, t).r if init is None else init.r
     fn = _residual(line, env, t)
     # 1) a regularised Newton descent on the static energy (``_descent``) finds the

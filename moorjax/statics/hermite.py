@@ -108,6 +108,7 @@ def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10
 @eqx.filter_jit
 def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     from .fem import LineStatics
 
     lt = line.line_type

@@ -24,7 +24,9 @@ import numpy as np
 from jaxtyping import Array
 
 from ..body.coupling import attach, mooring_wrenches
-from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, check_geometry, _solve_core
+from .exact import catenary_eligible, catenary_solves
+from .fem import (ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, _solve_core,
+                  check_geometry)
 
 
 class SystemStatics(eqx.Module):
@@ -37,6 +39,8 @@ class SystemStatics(eqx.Module):
         residual: (n_bodies, 6) force imbalance left [N, N·m].
         iterations: Newton iterations used.
         converged: whether the imbalance met the tolerance.
+        methods: each line's statics, ``"fem"`` or ``"catenary"`` (see
+            :func:`solve_system_statics`'s ``method``).
     """
 
     poses: Array
@@ -45,6 +49,7 @@ class SystemStatics(eqx.Module):
     residual: Array
     iterations: int
     converged: bool
+    methods: tuple = eqx.field(static=True, default=())
 
     def state(self) -> tuple:
         """Initial solver state for :func:`moorjax.simulate`: line states, then
@@ -55,18 +60,28 @@ class SystemStatics(eqx.Module):
         return tuple(b.rest_state(p) for b, p in zip(scene.bodies, self.poses))
 
 
-def _line_statics_at(scene, poses, t, inits=None):
-    vel = [jnp.zeros(6)] * len(scene.bodies)
-    lines = attach(scene.lines, scene.bodies, list(poses), vel)
+def _attached(scene, poses):
+    return attach(scene.lines, scene.bodies, list(poses), [jnp.zeros(6)] * len(scene.bodies))
+
+
+def _line_statics_at(scene, poses, t, inits=None, methods=None):
+    lines = _attached(scene, poses)
     inits = (None,) * len(lines) if inits is None else inits
+    methods = ("fem",) * len(lines) if methods is None else methods
+    t = jnp.asarray(t, dtype=float)
     # no end-below-the-bed check here: a free point resting on the seabed sinks to
     # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
     # a failed line solve is reported by ``converged``
-    return tuple(_solve_core(ln, scene.env, jnp.asarray(t, dtype=float), i, RTOL, ATOL, MAX_STEPS)
-                 for ln, i in zip(lines, inits))
+
+    def one(ln, init, method):
+        if method == "catenary":
+            return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
+        return _solve_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
+
+    return tuple(one(*x) for x in zip(lines, inits, methods))
 
 
-def mooring_wrench(scene, poses, t=0.0, inits=None) -> Array:
+def mooring_wrench(scene, poses, t=0.0, inits=None, methods=None) -> Array:
     """(n_bodies, 6) static wrench of the lines on each body at poses (n_bodies, 6).
 
     ``inits``: optional line states to start each line's static solve from (a
@@ -74,7 +89,7 @@ def mooring_wrench(scene, poses, t=0.0, inits=None) -> Array:
     lines resting on the seabed).
     """
     poses = jnp.asarray(poses, dtype=float).reshape(len(scene.bodies), 6)
-    st = _line_statics_at(scene, poses, t, inits)
+    st = _line_statics_at(scene, poses, t, inits, methods)
     ends = [(s.force_a, s.force_b) for s in st]
     return jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses), ends))
 
@@ -87,9 +102,9 @@ def body_forces(scene, poses, t=0.0, loads=True) -> Array:
 
 
 @eqx.filter_jit
-def _newton_parts(scene, poses, t, loads, inits):
+def _newton_parts(scene, poses, t, loads, inits, methods):
     def imbalance(p):
-        return body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits)
+        return body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits, methods)
 
     g, jvp_fn = jax.linearize(imbalance, poses)
     jac = jax.vmap(jvp_fn)(jnp.eye(poses.size).reshape((poses.size,) + poses.shape))
@@ -98,7 +113,8 @@ def _newton_parts(scene, poses, t, loads, inits):
 
 
 def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: float = 1e-6,
-                         max_iterations: int = 50, throw: bool = True) -> SystemStatics:
+                         max_iterations: int = 50, throw: bool = True,
+                         method: str = "fem") -> SystemStatics:
     """Equilibrium poses of the scene's bodies and the lines' static shapes.
 
     Args:
@@ -111,32 +127,93 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
             the bodies' loads.
         max_iterations: Newton iterations allowed.
         throw: raise ``RuntimeError`` when it does not converge.
+        method: the lines' statics (see :func:`moorjax.statics.solve_line_statics`).
+            ``"fem"`` (default): finite-element lines, the state dynamics start
+            from. ``"auto"``: each line the exact catenary describes (at the
+            starting poses) is one, the others FEM, so points and bodies settle
+            where the continuous lines put them; where that fails (no
+            convergence, a line end under the seabed: a point resting on the bed
+            is carried by its FEM lines' contact) the system is solved with FEM
+            lines. ``methods`` on the result says which each line got.
     """
     if not scene.bodies:
         raise ValueError("solve_system_statics needs a scene with bodies; use solve_statics")
+    if method not in ("fem", "auto"):
+        raise ValueError(f"method must be 'fem' or 'auto', got {method!r}")
     nb = len(scene.bodies)
     poses = jnp.zeros((nb, 6)) if init is None else jnp.asarray(init, float).reshape(nb, 6)
-    for line in attach(scene.lines, scene.bodies, list(poses), [jnp.zeros(6)] * nb):
+    for line in _attached(scene, poses):
         check_geometry(line, scene.env, t)  # names a line that cannot reach its ends
+    fem = ("fem",) * len(scene.lines)
+    if method == "auto":
+        methods = tuple("catenary" if catenary_eligible(ln, scene.env)
+                        and catenary_solves(ln, scene.env, t) else "fem"
+                        for ln in _attached(scene, poses))
+        if methods != fem:
+            out = _system_newton(scene, poses, t, loads, tol, max_iterations, methods)
+            if out.converged and _ends_above_bed(scene, out):
+                return out
+    out = _system_newton(scene, poses, t, loads, tol, max_iterations, fem)
+    if throw and not out.converged:
+        bad = [scene.lines[i].label for i, s in enumerate(out.lines) if not bool(s.converged)]
+        why = (f"the static solve of line(s) {', '.join(bad)} failed (can they reach their "
+               "anchors?)" if bad else
+               f"force imbalance {np.max(np.abs(np.asarray(out.residual))):.3g} N after "
+               f"{out.iterations} Newton iterations")
+        raise RuntimeError(f"system statics did not converge: {why}")
+    return out
+
+
+def _newton_step(jac, g):
+    """The Newton step −J⁻¹g on the poses; where J is singular or undefined (a point on
+    slack weightless lines has no stiffness, and such a line's shape, hence its
+    implicit derivative, is undetermined) a regularised step (μI − J)Δη = g with
+    μ = |g|max per metre (translations) or per 0.05 rad (rotations), which moves
+    along the net force where J = 0 and becomes Newton's step as g vanishes."""
+    g = g.ravel()
+    try:
+        step = np.linalg.solve(jac, -g)
+        if np.all(np.isfinite(step)) and np.linalg.cond(jac) < 1e12:
+            return step
+    except np.linalg.LinAlgError:
+        pass
+    jac = np.where(np.isfinite(jac), jac, 0.0)
+    gb = g.reshape(-1, 6)
+    scale = max(float(np.max(np.abs(g))), 1e-300)
+    mu = np.tile(np.array([scale / 1.0] * 3 + [scale / 0.05] * 3), gb.shape[0])
+    return np.linalg.solve(np.diag(mu) - jac, g)
+
+
+def _ends_above_bed(scene, out) -> bool:
+    """Whether every catenary line's ends are on or above the seabed."""
+    if scene.env.seabed is None:
+        return True
+    floor = -float(scene.env.depth) * (1.0 + 1e-6)
+    return all(float(np.min(np.asarray(st.positions)[[0, -1], 2])) >= floor
+               for st, m in zip(out.lines, out.methods) if m == "catenary")
+
+
+def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> SystemStatics:
+    nb = len(scene.bodies)
     t = jnp.asarray(t, dtype=float)
     scale = None
     converged = False
     it = 0
-    inits = tuple(s.state() for s in _line_statics_at(scene, poses, t))
+    inits = tuple(s.state() for s in _line_statics_at(scene, poses, t, None, methods))
     for it in range(1, max_iterations + 1):
-        g, jac = _newton_parts(scene, poses, t, bool(loads), inits)
+        g, jac = _newton_parts(scene, poses, t, bool(loads), inits, methods)
         g_np = np.asarray(g)
-        if not np.all(np.isfinite(g_np)) or not np.all(np.isfinite(np.asarray(jac))):
+        if not np.all(np.isfinite(g_np)):
             break
         if scale is None:
-            st = _line_statics_at(scene, poses, t, inits)
+            st = _line_statics_at(scene, poses, t, inits, methods)
             tens = max(float(jnp.max(jnp.abs(s.tensions))) for s in st)
             scale = max(tens, float(np.max(np.abs(g_np))), 1.0)
         # moments are compared on the same scale times a unit lever arm
         if np.max(np.abs(g_np)) < tol * scale:
             converged = True
             break
-        step = np.linalg.solve(np.asarray(jac), -g_np.ravel()).reshape(nb, 6)
+        step = _newton_step(np.asarray(jac), g_np).reshape(nb, 6)
         # damp large rotations and translations (the line statics must stay reachable)
         big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
         # backtracking: seabed contact makes the imbalance kinked, so a full
@@ -145,7 +222,7 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         size = np.max(np.abs(g_np))
         for _ in range(6):
             trial = poses + jnp.asarray(step)
-            new = _line_statics_at(scene, trial, t, inits)
+            new = _line_statics_at(scene, trial, t, inits, methods)
             ok = all(bool(x.converged) for x in new)
             if ok:
                 ends = [(x.force_a, x.force_b) for x in new]
@@ -158,19 +235,11 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
             break
         poses = trial
         inits = tuple(x.state() for x in new)
-    st = _line_statics_at(scene, poses, t, inits)
-    wrench = mooring_wrench(scene, poses, t, inits)
+    st = _line_statics_at(scene, poses, t, inits, methods)
+    wrench = mooring_wrench(scene, poses, t, inits, methods)
     residual = body_forces(scene, poses, t, loads) + wrench
     lines_ok = all(bool(s.converged) for s in st)
-    out = SystemStatics(poses, st, wrench, residual, it, bool(converged and lines_ok))
-    if throw and not out.converged:
-        bad = [scene.lines[i].label for i, s in enumerate(st) if not bool(s.converged)]
-        why = (f"the static solve of line(s) {', '.join(bad)} failed (can they reach their "
-               "anchors?)" if bad else
-               f"force imbalance {np.max(np.abs(np.asarray(residual))):.3g} N after {it} Newton "
-               "iterations")
-        raise RuntimeError(f"system statics did not converge: {why}")
-    return out
+    return SystemStatics(poses, st, wrench, residual, it, bool(converged and lines_ok), methods)
 
 
 def mooring_stiffness(scene, poses=None, t=0.0) -> Array:

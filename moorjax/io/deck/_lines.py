@@ -2,12 +2,15 @@
 
 Columns ``ID LineType AttachA AttachB UnstrLen NumSegs LineOutputs``; an end is
 a point id (``3``, ``P3``); rod ends and bodies are refused with the reason.
+``LineOutputs`` flags that moorjax does not write, or that are no MoorDyn flag,
+are warned about by name (:mod:`moorjax.io.line_outputs`).
 """
 
 from __future__ import annotations
 
 import re
 
+from ..line_outputs import NOT_WRITTEN, WRITTEN, split_flags
 from ._lexer import Context, Row, Section, check_ids_sequential, integer, number, require_columns
 from ._records import DeckLine, DeckLineType, DeckPoint
 
@@ -43,6 +46,19 @@ def _parse_attachment_ref(ctx: Context, row: Row, index: int, what: str, field: 
     )
 
 
+def _check_outputs(ctx: Context, row: Row, what: str, text: str) -> None:
+    """Warn about ``LineOutputs`` flags moorjax does not write, by name."""
+    _, missing, unknown = split_flags(text)
+    if missing:
+        names = ", ".join(f"{f} ({NOT_WRITTEN[f]})" for f in missing)
+        ctx.warn(row.lineno, f"{what}: LineOutputs = {text!r}: {names} not written by moorjax "
+                             f"(it writes {', '.join(WRITTEN)})")
+    if unknown:
+        ctx.warn(row.lineno, f"{what}: LineOutputs = {text!r}: {', '.join(repr(c) for c in unknown)} "
+                             f"not a MoorDyn line output flag (ignored, as MoorDyn does); expected "
+                             f"letters of {WRITTEN + ''.join(NOT_WRITTEN)} or -")
+
+
 def _parse_line(ctx: Context, row: Row) -> DeckLine:
     what = "LINES row"
     require_columns(ctx, row, what, _LINE_COLUMNS)
@@ -55,6 +71,7 @@ def _parse_line(ctx: Context, row: Row) -> DeckLine:
     nseg = integer(ctx, row, 5, what, "NumSegs", "pos")
     if len(t) > 7:
         ctx.warn(row.lineno, f"{what}: {len(t) - 7} extra column(s) ignored: {' '.join(t[7:])}")
+    _check_outputs(ctx, row, what, t[6])
     return DeckLine(
         id=lid,
         line_type=t[1],

@@ -154,6 +154,24 @@ def _check_currents_mode(ctx: Context, lineno: int, name: str, token: str, value
     )
 
 
+def _check_wave_mode(ctx: Context, lineno: int, name: str, token: str, value: float) -> None:
+    """``WaveKin``: 0 none, 2 (FFT grid), 3 (elevation grid) and 7 (component sum)
+    are read (:mod:`moorjax.io.waves`); 1 needs MoorDyn's external-kinematics API;
+    4, 5 and 6 are not implemented in MoorDyn either."""
+    if value in (0, 2, 3, 7):
+        return
+    expected = ("expected 0 (none), 2 (wave_frequencies.txt on a grid), 3 (wave_elevation.txt on a "
+                "grid) or 7 (wave_frequencies.txt summed at the nodes)")
+    if value == 1:
+        raise ctx.error(lineno, f"OPTIONS: {name} = {token}: externally driven waves (set through "
+                        "MoorDyn's API at run time, MoorDyn_ExternalWaveKinSet) are not supported; give "
+                        f"the sea as wave components instead: {expected}")
+    if value in (4, 5, 6):
+        raise ctx.error(lineno, f"OPTIONS: {name} = {token}: wave mode {int(value)} is not implemented "
+                        f"in MoorDyn v2 either; {expected}")
+    raise ctx.error(lineno, f"OPTIONS: {name} = {token} is not a MoorDyn wave mode; {expected}")
+
+
 def parse_options(ctx: Context, section: Section) -> tuple[dict[str, float | str], dict[str, int]]:
     options: dict[str, float | str] = {}
     where: dict[str, int] = {}
@@ -200,13 +218,8 @@ def parse_options(ctx: Context, section: Section) -> tuple[dict[str, float | str
                     "expected a water depth > 0 in m",
                 )
             value = number(ctx, row, 0, what, name, unit, constraint)
-            if canonical == "WaveKin" and value != 0:
-                raise ctx.error(
-                    row.lineno,
-                    f"{what}: {name} = {value_tok}: wave kinematics on lines are not supported yet "
-                    "(MoorDyn's WaveKin 1 external, 2 FFT grid, 3 elevation grid, 7 component sum); "
-                    "expected 0",
-                )
+            if canonical == "WaveKin":
+                _check_wave_mode(ctx, row.lineno, name, value_tok, value)
             if canonical == "Currents":
                 _check_currents_mode(ctx, row.lineno, name, value_tok, value)
             key = canonical

@@ -6,6 +6,7 @@ import warnings
 from pathlib import Path
 
 from ..currents import CURRENT_FILES, read_current_profile, read_dynamic_current_profile
+from ..waves import read_deck_waves
 from ..errors import InputWarning
 from ..seafloor import read_seafloor
 from ._bodies import parse_bodies
@@ -74,6 +75,7 @@ def _parse(text: str, ctx: Context) -> Deck:
     if "OPTIONS" in sections:
         options, option_lines = parse_options(ctx, sections["OPTIONS"])
     current = _read_current(ctx, options, option_lines)
+    waves = _read_waves(ctx, options, option_lines)
     seafloor = read_seafloor(options["SeafloorFile"]) if "SeafloorFile" in options else None
     _check_unsupported(ctx, sections)
 
@@ -93,6 +95,7 @@ def _parse(text: str, ctx: Context) -> Deck:
         bodies=bodies,
         current=current,
         seafloor=seafloor,
+        waves=waves,
     )
 
 
@@ -105,6 +108,16 @@ def _read_current(ctx: Context, options: dict[str, float | str], option_lines: d
     side = Path(ctx.path).parent / CURRENT_FILES[mode]
     reader = read_current_profile if mode == 1 else read_dynamic_current_profile
     return reader(side, origin)
+
+
+def _read_waves(ctx: Context, options: dict[str, float | str], option_lines: dict[str, int]):
+    """The wave components of ``WaveKin`` 2, 3 or 7, from the files MoorDyn-C reads
+    from the deck's folder (:mod:`moorjax.io.waves`)."""
+    mode = int(options.get("WaveKin", 0))
+    if not mode:
+        return None
+    origin = f"{ctx.path}:{option_lines['WaveKin']}: OPTIONS: WaveKin = {mode}"
+    return read_deck_waves(Path(ctx.path).parent, mode, float(options.get("dtWave", 0.25)), origin)
 
 
 def _check_unsupported(ctx: Context, sections: dict[str, Section]) -> None:

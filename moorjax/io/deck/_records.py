@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..currents import DeckCurrent
+from ..waves import DeckWaves
 from ..frames import body_point_positions
 from ..seafloor import DeckSeafloor
 
@@ -185,6 +186,9 @@ class Deck:
             (:mod:`moorjax.io.currents`); ``None`` without currents.
         seafloor: the bathymetry grid of a deck with ``SeafloorFile``
             (:mod:`moorjax.io.seafloor`); ``None`` for a flat seabed.
+        waves: the wave components of a deck with ``WaveKin`` 2, 3 or 7, read
+            from the files MoorDyn-C reads next to the deck
+            (:mod:`moorjax.io.waves`); ``None`` without waves.
     """
 
     path: str
@@ -197,6 +201,7 @@ class Deck:
     bodies: dict[int, DeckBody] = field(default_factory=dict)
     current: DeckCurrent | None = None
     seafloor: DeckSeafloor | None = None
+    waves: DeckWaves | None = None
 
     def point_position(self, point_id: int) -> tuple[float, float, float]:
         """Global position [m] of a point at the deck's initial poses (body
