@@ -89,7 +89,7 @@ def test_cli_element_option_on_dynamics(tmp_path):
         assert "--element" in out.getvalue(), cmd
     err = io.StringIO()
     with contextlib.redirect_stderr(err):
-        rc = main(["simulate", str(DATA / "body_coupled.dat"), "--duration", "0.1",
+        rc = main(["simulate", str(DATA / "body_free.dat"), "--duration", "0.1",
                    "--element", "hermite", "--out", str(tmp_path / "o.csv")])
     assert rc != 0
     msg = err.getvalue()
