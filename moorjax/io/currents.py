@@ -22,13 +22,13 @@ Pure Python + numpy; no JAX.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .errors import InputError
+from .table import row_numbers
 
 __all__ = ["DeckCurrent", "read_current_profile", "read_dynamic_current_profile", "CURRENT_FILES"]
 
@@ -53,19 +53,6 @@ class DeckCurrent:
     z: np.ndarray
     velocity: np.ndarray
     t: np.ndarray | None = None
-
-
-def _numbers(path: str, lineno: int, raw: str, what: str) -> list[float]:
-    out = []
-    for tok in raw.replace(",", " ").split():
-        try:
-            v = float(tok)
-        except ValueError:
-            raise InputError(f"{path}:{lineno}: {what}: {tok!r} is not a number (row {raw.strip()!r})") from None
-        if not math.isfinite(v):
-            raise InputError(f"{path}:{lineno}: {what}: {tok} must be a finite number")
-        out.append(v)
-    return out
 
 
 def _check_increasing(path, linenos, values, name, unit):
@@ -97,7 +84,7 @@ def read_current_profile(path, origin: str = "") -> DeckCurrent:
     for lineno, raw in enumerate(lines[3:], start=4):
         if not raw.strip():
             continue
-        vals = _numbers(str(path), lineno, raw, "steady current row 'z ux [uy [uz]]'")
+        vals = row_numbers(str(path), lineno, raw, "steady current row 'z ux [uy [uz]]'")
         if len(vals) < 2:
             raise InputError(f"{path}:{lineno}: steady current row {raw.strip()!r} has {len(vals)} "
                              "number(s); expected 'z [m] ux [m/s] [uy [m/s] [uz [m/s]]]'")
@@ -118,7 +105,7 @@ def read_dynamic_current_profile(path, origin: str = "") -> DeckCurrent:
     if len(lines) < 7:
         raise InputError(f"{path}: {len(lines)} lines; a dynamic current file has 4 ignored lines, "
                          "the depths on line 5, an ignored line 6 and then 't ux.. [uy.. [uz..]]' rows")
-    z = _numbers(str(path), 5, lines[4], "depths row (line 5)")
+    z = row_numbers(str(path), 5, lines[4], "depths row (line 5)")
     if not z:
         raise InputError(f"{path}:5: the depths row is empty; expected the heights z [m] of the profile")
     _check_increasing(str(path), [5] * len(z), z, "z", "m")
@@ -127,7 +114,7 @@ def read_dynamic_current_profile(path, origin: str = "") -> DeckCurrent:
     for lineno, raw in enumerate(lines[6:], start=7):
         if not raw.strip():
             continue
-        vals = _numbers(str(path), lineno, raw, "dynamic current row")
+        vals = row_numbers(str(path), lineno, raw, "dynamic current row")
         if len(vals) not in (1 + k, 1 + 2 * k, 1 + 3 * k):
             raise InputError(
                 f"{path}:{lineno}: dynamic current row has {len(vals)} numbers; with {k} depths expected "

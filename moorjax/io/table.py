@@ -103,6 +103,22 @@ class Table:
         return {("t" if h.lower() == "t" else h): data[:, j] for j, h in enumerate(self.header)}
 
 
+def row_numbers(path, lineno: int, raw: str, what: str) -> list[float]:
+    """The finite numbers of one whitespace- or comma-separated row of a MoorDyn
+    input file (current, wave and grid files); ``InputError`` names the file, the
+    line, the row's meaning ``what`` and the bad token."""
+    out = []
+    for tok in raw.replace(",", " ").split():
+        try:
+            v = float(tok)
+        except ValueError:
+            raise InputError(f"{path}:{lineno}: {what}: {tok!r} is not a number (row {raw.strip()!r})") from None
+        if not math.isfinite(v):
+            raise InputError(f"{path}:{lineno}: {what}: {tok} must be a finite number")
+        out.append(v)
+    return out
+
+
 def read_table(path, expected: str = "t,...") -> Table:
     """Read the header and rows of a time table.
 

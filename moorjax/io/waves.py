@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .table import row_numbers
 
 __all__ = ["DeckWaves", "WAVE_FILES", "read_deck_waves", "read_wave_frequencies", "read_wave_elevation",
            "read_water_grid"]
@@ -77,19 +78,6 @@ class DeckWaves:
     grid: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
-def _numbers(path, lineno, raw, what):
-    out = []
-    for tok in raw.replace(",", " ").split():
-        try:
-            v = float(tok)
-        except ValueError:
-            raise InputError(f"{path}:{lineno}: {what}: {tok!r} is not a number (row {raw.strip()!r})") from None
-        if not math.isfinite(v):
-            raise InputError(f"{path}:{lineno}: {what}: {tok} must be a finite number")
-        out.append(v)
-    return out
-
-
 def _lines(path: Path, origin: str) -> list[str]:
     if not path.is_file():
         raise InputError(f"{origin}: the wave file {str(path)!r} does not exist (MoorDyn reads it from the "
@@ -106,7 +94,7 @@ def read_wave_frequencies(path, origin: str = ""):
     for lineno, raw in enumerate(_lines(path, origin or str(path)), start=1):
         if not raw.strip():
             continue
-        vals = _numbers(path, lineno, raw, what)
+        vals = row_numbers(path, lineno, raw, what)
         if len(vals) not in (3, 4):
             raise InputError(f"{path}:{lineno}: {len(vals)} numbers; expected 3 or 4 in a {what}")
         b = vals[3] if len(vals) == 4 else 0.0
@@ -133,7 +121,7 @@ def read_wave_elevation(path, origin: str = ""):
     for lineno, raw in enumerate(_lines(path, origin or str(path)), start=1):
         if not raw.strip():
             continue
-        vals = _numbers(path, lineno, raw, "wave elevation row 't [s] eta [m]'")
+        vals = row_numbers(path, lineno, raw, "wave elevation row 't [s] eta [m]'")
         if len(vals) < 2:
             raise InputError(f"{path}:{lineno}: {len(vals)} number(s); expected 't [s] eta [m]'")
         if ts and not vals[0] > ts[-1]:
@@ -148,8 +136,8 @@ def read_wave_elevation(path, origin: str = ""):
 
 
 def _grid_axis(path, lineno, kind_raw, raw):
-    kind = _numbers(path, lineno - 1, kind_raw, "grid axis kind (0 single, 1 list, 2 lattice)")
-    vals = _numbers(path, lineno, raw, "grid axis coordinates [m]")
+    kind = row_numbers(path, lineno - 1, kind_raw, "grid axis kind (0 single, 1 list, 2 lattice)")
+    vals = row_numbers(path, lineno, raw, "grid axis coordinates [m]")
     k = int(kind[0]) if kind else -1
     if k == 0:
         return np.zeros(1)
