@@ -51,8 +51,6 @@ class ArgumentParser(argparse.ArgumentParser):
 def cmd_statics(args) -> int:
     import jax
 
-    from .statics import solve_line_statics
-
     _, scene, _ = load(args)
     if scene.bodies and args.element == "hermite":
         from .io.errors import InputError
@@ -77,9 +75,8 @@ def cmd_statics(args) -> int:
         statics = system.lines
         methods = list(system.methods)
     else:
-        methods = [_statics_method(line, scene.env, args.method) for line in scene.lines]
-        statics = [solve_line_statics(line, scene.env, throw=False, method=m)
-                   for line, m in zip(scene.lines, methods)]
+        statics, methods = zip(*(_line_statics(line, scene.env, args.method)
+                                 for line in scene.lines))
     rows = []
     for line, st, method in zip(scene.lines, statics, methods):
         st = jax.device_get(st)
@@ -121,14 +118,19 @@ def cmd_statics(args) -> int:
     return 0
 
 
-def _statics_method(line, env, method: str) -> str:
-    """The statics method a line gets: ``auto`` becomes ``catenary`` where the exact
-    catenary describes the line and has a solution, else ``fem``."""
-    if method != "auto":
-        return method
-    from .statics.exact import catenary_eligible, catenary_solves
+def _line_statics(line, env, method: str):
+    """A line's statics and the method it got: ``auto`` is the exact catenary where
+    it describes the line and has a solution (its ``converged`` flag), else the FEM."""
+    from .statics import solve_line_statics
+    from .statics.exact import catenary_eligible
 
-    return "catenary" if catenary_eligible(line, env) and catenary_solves(line, env) else "fem"
+    if method == "auto":
+        if catenary_eligible(line, env):
+            st = solve_line_statics(line, env, throw=False, method="catenary")
+            if bool(st.converged):
+                return st, "catenary"
+        method = "fem"
+    return solve_line_statics(line, env, throw=False, method=method), method
 
 
 class _CompileTimer:

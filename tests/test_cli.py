@@ -236,3 +236,14 @@ def test_statics_method_auto_is_the_exact_catenary_and_fem_the_discrete_model(ca
     assert auto["grounded_length"] == pytest.approx(CASE_A["grounded"], abs=1e-3)
     err = abs(fem["tension_b"] / CASE_A["tension_b"] - 1)
     assert 1e-5 < err < 2e-2  # 10 segments: a visible discretisation error
+
+
+def test_statics_method_catenary_is_refused_where_it_cannot_hold(capsys):
+    """``--method catenary`` on a line in a current, or on a deck with a free point (a
+    system), exits with code 2 and says what to use instead."""
+    data = Path(__file__).parent / "data"
+    for deck, why in ((data / "current_steady" / "line.dat", "no current"),
+                      (data / "moorpy_case2.dat", "solved as a system")):
+        rc = main(["statics", str(deck), "--method", "catenary"])
+        err = capsys.readouterr().err
+        assert rc == 2 and why in err and "auto" in err, err

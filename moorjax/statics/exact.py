@@ -19,8 +19,8 @@ state: dynamics start from the finite-element equilibrium (``method="fem"``).
 
 Where the catenary does not apply or has no solution — a line whose sag would go
 under the seabed with both ends above it, a slack line piled on the bed, a
-weightless slack line — :func:`catenary_applies` is False at run time and the
-caller falls back to the finite-element solve. Seabed friction is left out, as in
+weightless slack line — the ``ok`` flag of :func:`catenary_statics` is False at run
+time and the caller falls back to the finite-element solve. Seabed friction is left out, as in
 the finite-element statics and MoorDyn (a line at rest carries no friction).
 """
 
@@ -31,6 +31,7 @@ import jax.numpy as jnp
 
 from .._numerics import safe_norm
 from ..element.linear import LinearElement
+from .catenary import catenary_line_forces, catenary_nodes, catenary_profile
 from ..model.axial import LinearEA
 
 __all__ = ["catenary_eligible", "catenary_statics", "catenary_solves"]
@@ -65,8 +66,7 @@ def catenary_statics(line, env, t):
     the catenary's Newton steps; ``max_residual`` is its end-point mismatch times
     EA/L [N] (the force that mismatch would take to close).
     """
-    from .catenary import catenary_line_forces, catenary_nodes
-    from .fem import LineStatics
+    from .fem import LineStatics  # fem imports this module
 
     lt = line.line_type
     ra, rb = line.end_a.position(t), line.end_b.position(t)
@@ -83,8 +83,6 @@ def catenary_statics(line, env, t):
     # segment tension at mid-length (profile measured from the lower end)
     mid = l * (jnp.arange(line.n_segments) + 0.5)
     swap = ra[2] > rb[2]
-    from .catenary import catenary_profile
-
     _, _, tension = catenary_profile(sol, jnp.where(swap, length - mid, mid))
     ok = sol.converged & jnp.all(jnp.isfinite(nodes)) & jnp.all(jnp.isfinite(tension))
     if lt.ei is not None:  # a cable, unless the bending length is negligible
@@ -114,8 +112,6 @@ def _sag_above(sol, bed, ra, rb, length):
     """Whether the catenary between the nodes stays above the bed: the lowest point
     of a sagging catenary lies where the vertical tension vanishes (s = VA-free
     point), which may fall between nodes."""
-    from .catenary import catenary_profile
-
     # arc length from the lower end where the vertical tension is zero: VA < 0 means
     # the line leaves the lower end going down
     s0 = jnp.clip(-sol.VA / jnp.where(sol.W > 0, sol.W, jnp.inf), 0.0, length)
