@@ -178,9 +178,8 @@ def _newton_step(jac, g):
     except np.linalg.LinAlgError:
         pass
     jac = np.where(np.isfinite(jac), jac, 0.0)
-    gb = g.reshape(-1, 6)
     scale = max(float(np.max(np.abs(g))), 1e-300)
-    mu = np.tile(np.array([scale / 1.0] * 3 + [scale / 0.05] * 3), gb.shape[0])
+    mu = np.tile(np.array([scale / 1.0] * 3 + [scale / 0.05] * 3), g.size // 6)
     return np.linalg.solve(np.diag(mu) - jac, g)
 
 
