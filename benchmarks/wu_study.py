@@ -260,30 +260,63 @@ def draw_cases(n, rng):
     )
 
 
-def uniformity(mat, radius, args, draws, record, transient):
+def uniformity(mat, radius, args, draws, record, transient, store=None):
+    """The drawn cases of one material, run in vmapped chunks of ``args.chunk`` members.
+
+    Each chunk's peaks and means are written to ``store/{mat}_{first case}.npz`` as it
+    finishes, and read back instead of rerun (so an interrupted study resumes where it
+    stopped). On a CPU a chunk of 1 is the cheapest per member: a vmapped batch takes
+    as many steps as its slowest member and every Newton iteration of the slowest one.
+    """
     n = len(draws["seed"])
-    scenes = []
-    for i in range(n):
-        kw = {k: (int(v[i]) if k == "seed" else float(v[i])) for k, v in draws.items()}
-        scenes.append(wu.scene(mat, radius=radius, n_segments=args.segments,
-                               n_components=args.components, **kw))
-    t0 = time.perf_counter()
-    # the loaded equilibria, vmapped; where one did not converge it starts where
-    # the iteration stopped (near equilibrium is enough)
-    inits, converged = ensemble_equilibrium(scenes)
-    jax.block_until_ready(inits)
-    not_conv = np.flatnonzero(~np.all(np.asarray(converged), axis=1)).tolist()
-    t_statics = time.perf_counter() - t0
-    res, wall = _timed(simulate_ensemble, scenes, transient + record, init=inits,
-                       dt_out=args.dt_out, solver=args.solver, rtol=args.rtol, atol=args.atol)
-    jax.block_until_ready(res.tension_b)
-    ok = np.array([s == "ok" for s in ensemble_status(res)])
-    ten = np.asarray(res.tension_b)  # (cases, k, 4)
-    ten = ten[:, np.asarray(res.ts[0]) >= transient]
-    peak, mean = ten.max(axis=1), ten.mean(axis=1)
+    k = max(1, int(args.chunk))
+    peak, mean = np.full((n, 4), np.nan), np.full((n, 4), np.nan)
+    ok, steps = np.zeros(n, bool), np.zeros(n, int)
+    not_conv, t_statics, wall = [], 0.0, 0.0
+    for first in range(0, n, k):
+        idx = np.arange(first, min(first + k, n))
+        path = None if store is None else Path(store) / f"{mat}_{first:04d}.npz"
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        key = np.array([record, transient, args.segments, args.rtol, args.atol, len(idx)])
+        if path is not None and path.exists():
+            z = np.load(path)
+            if z["key"].shape == key.shape and np.allclose(z["key"], key):
+                peak[idx], mean[idx], ok[idx], steps[idx] = z["peak"], z["mean"], z["ok"], z["steps"]
+                t_statics, wall = t_statics + float(z["statics_s"]), wall + float(z["ensemble_s"])
+                not_conv += [int(i) for i in z["not_conv"]]
+                continue
+        scenes = []
+        for i in idx:
+            kw = {kk: (int(v[i]) if kk == "seed" else float(v[i])) for kk, v in draws.items()}
+            scenes.append(wu.scene(mat, radius=radius, n_segments=args.segments,
+                                   n_components=args.components, **kw))
+        t0 = time.perf_counter()
+        # the loaded equilibria, vmapped; where one did not converge it starts where
+        # the iteration stopped (near equilibrium is enough)
+        inits, converged = ensemble_equilibrium(scenes)
+        jax.block_until_ready(inits)
+        nc = idx[~np.all(np.asarray(converged), axis=1)]
+        ts = time.perf_counter() - t0
+        res, w = _timed(simulate_ensemble, scenes, transient + record, init=inits,
+                        dt_out=args.dt_out, solver=args.solver, rtol=args.rtol, atol=args.atol)
+        jax.block_until_ready(res.tension_b)
+        ten = np.asarray(res.tension_b)[:, np.asarray(res.ts[0]) >= transient]  # (k, samples, 4)
+        peak[idx], mean[idx] = ten.max(axis=1), ten.mean(axis=1)
+        ok[idx] = [s == "ok" for s in ensemble_status(res)]
+        steps[idx] = np.asarray(res.num_steps)
+        t_statics, wall = t_statics + ts, wall + w
+        not_conv += nc.tolist()
+        if path is not None:
+            np.savez(path, key=key, peak=peak[idx], mean=mean[idx], ok=ok[idx], steps=steps[idx],
+                     statics_s=ts, ensemble_s=w, not_conv=nc)
+        print(f"  {mat} cases {idx[0]}–{idx[-1]}: {int(ok[idx].sum())}/{len(idx)} ok, "
+              f"{w:.0f} s", flush=True)
     return dict(
         cases=n, ok=int(ok.sum()), statics_not_converged=not_conv, record_s=record,
-        transient_s=transient, steps_max=int(np.max(np.asarray(res.num_steps))),
+        transient_s=transient, chunk=k, steps_max=int(steps.max()), steps_mean=float(steps.mean()),
+        # Wu's uniformity (L306): the standard deviation over the four cables of each
+        # case's peak (mean) force, averaged over the cases
         std_peak_N=float(np.mean(peak[ok].std(axis=1))),
         std_mean_N=float(np.mean(mean[ok].std(axis=1))),
         peak_N=peak.tolist(), mean_N=mean.tolist(), statics_s=t_statics, ensemble_s=wall,
@@ -342,6 +375,10 @@ def main(argv=None):
     p.add_argument("--case-duration", type=float, default=None,
                    help="uniformity record after the transient [s] (default: 3 surge periods)")
     p.add_argument("--case-transient", type=float, default=200.0, help="[s]")
+    p.add_argument("--chunk", type=int, default=1,
+                   help="uniformity cases per vmapped batch (on a CPU 1 is cheapest per case: "
+                        "a batch steps as often as its slowest member); each finished chunk is "
+                        "kept in OUT/uniformity_cases and reused by a rerun")
     p.add_argument("--lengths", type=float, nargs="+", default=[106, 108, 110, 112, 114, 116])
     p.add_argument("--sweep-duration", type=float, default=600.0, help="length-sweep runs [s]")
     p.add_argument("--conv-duration", type=float, default=300.0, help="convergence runs [s]")
@@ -414,7 +451,8 @@ def main(argv=None):
         uni = {"draws": {k: np.asarray(v).tolist() for k, v in draws.items()}}
         for mat in MATERIALS:
             record = a.case_duration or three_periods(mat)
-            uni[mat] = uniformity(mat, radii[mat], a, draws, record, a.case_transient)
+            uni[mat] = uniformity(mat, radii[mat], a, draws, record, a.case_transient,
+                                  store=out / "uniformity_cases")
             u = uni[mat]
             print(f"uniformity {mat}: std peak {u['std_peak_N'] / 1e3:.2f} kN, std mean "
                   f"{u['std_mean_N'] / 1e3:.2f} kN ({u['ok']}/{u['cases']} ok, {record:.0f} s records, "
