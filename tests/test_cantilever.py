@@ -248,7 +248,7 @@ def test_hermite_dynamics_refuses_a_clamp():
 def test_clamped_beam_held_from_statics_stays_in_equilibrium_in_dynamics():
     """The linear element's clamp acts in the dynamics too (the end moment is a
     force on the first free node): the propped cantilever started from its
-    static state stays there (end force constant to 1e-6). ~40 s."""
+    static state stays there (end force constant to 1e-6). ~75 s."""
     from moorjax.dynamics import simulate
 
     lt = line_type(981.0)
