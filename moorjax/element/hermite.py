@@ -358,10 +358,6 @@ class HermiteElement(AbstractElement):
 
 def _check_supported(line, env):
     """Trace-time refusal of what the Hermite dynamics does not model."""
-    if clamped_slopes(line):
-        raise ValueError("HermiteElement: a clamped end (ClampedEnd) is supported in statics only; "
-                         "its dynamics would hold the end slope's direction (not implemented yet): "
-                         "use LinearElement for a clamped line in dynamics")
     if env.seabed is not None and env.seabed.bathymetry is not None:
         raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported; "
                          "use --element linear (LinearElement) for lines over a 3-D seabed")
