@@ -184,7 +184,7 @@ def test_linear_cantilever_converges_at_order_2():
 def test_large_deflection_cantilever_against_the_elastica():
     """qL³/EI = 24 (beam theory's tip 3.0 m, 30 % of L; the elastica's 2.808 m,
     its tip pulled in 0.462 m): 4 Hermite elements within 2e-5 of the
-    extensible elastica (measured 1.35e-5; 2: 1.7e-5, 8: 1.1e-6). ~35 s. (The
+    extensible elastica (measured 1.35e-5; 2: 1.7e-5, 8: 1.1e-6). ~6–35 s. (The
     linear element: 7.9e-3, 1.9e-3, 4.7e-4 at 10, 20, 40 segments, 70–120 s each.)"""
     q = 2.4e4
     d, _ = cantilever(4, q, 0.0, HermiteElement(), load_steps=6)
@@ -241,7 +241,7 @@ def test_clamped_beam_held_from_statics_stays_in_equilibrium_in_dynamics(element
     force on the first free node; Hermite: the clamped slope accelerates along
     the clamp's direction only): the propped cantilever started from its static
     state stays there (the clamp's force constant to 1e-6 and equal to the
-    statics'). ~40–75 s each."""
+    statics'). ~10–30 s each."""
     from moorjax.dynamics import simulate
 
     line = mj.Line(line_type(981.0), L, n, CLAMP, mj.FixedEnd((L, 0.0, -50.0)), element=element)
