@@ -32,7 +32,9 @@ Newmark reference, 60 s): with the earlier bilateral field (c = 1) the lower lin
 carried up to −170 kN of compression in the troughs, holding the fairlead
 tension at 12 kN where MoorDyn has 115 kN (RMS error 10 % of the std); with
 c = 1e-2, 1e-3, 1e-4: 2.5 %, 1.3 %, 1.25 %. Ends are pinned (the end slopes are
-unknowns with zero end moment).
+unknowns with zero end moment) unless clamped
+(:class:`~moorjax.model.ends.AbstractClampedEnd`): a clamp fixes the direction
+of the end slope, its length 1 + ε stays free (:func:`clamped_slopes`).
 """
 
 from __future__ import annotations
@@ -359,3 +361,19 @@ def _check_supported(line, env):
     if env.seabed is not None and env.seabed.bathymetry is not None:
         raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported; "
                          "use --element linear (LinearElement) for lines over a 3-D seabed")
+
+
+def clamped_slopes(line, t=0.0):
+    """The clamped end slopes: ``[(node, direction), ...]`` with the node index (0
+    or n) and the unit vector (3,) the slope dr/ds must keep there (from end A the
+    clamp's direction, from end B its reverse). Only the length of such a slope
+    (1 + ε) is an unknown; the two components of the generalised force across it
+    are the clamp's end moment. Structure: empty for pinned ends."""
+    from ..model.ends import AbstractClampedEnd
+
+    out = []
+    if isinstance(line.end_a, AbstractClampedEnd):
+        out.append((0, line.end_a.direction(t)))
+    if isinstance(line.end_b, AbstractClampedEnd):
+        out.append((line.n_segments, -line.end_b.direction(t)))
+    return out

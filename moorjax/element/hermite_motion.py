@@ -11,7 +11,9 @@ weighs slopes like positions.
 The accelerations solve the consistent mass matrix M (the Hermite shape
 functions' ∫ H_a μ H_b ds, μ = m·I plus the added mass ρA·|r'|·(Ca_n(I − ttᵀ) +
 Ca_ax ttᵀ); dense, 6(n+1) square) with the prescribed end accelerations on the
-right-hand side.
+right-hand side. A clamped end's slope (:class:`~moorjax.model.ends.ClampedEnd`,
+fixed) accelerates along the clamp's direction only: the solve is restricted
+to that direction for its row (:func:`_clamped_solve`).
 
 How the extensibility condition (Wu et al. Eq. 27) enters — the tension closure:
 
@@ -57,8 +59,8 @@ import numpy as np
 from jaxtyping import Array
 
 from .._numerics import safe_norm
-from .hermite import (H, WQ, HermiteDofs, element_fields, extensibility, extensibility_jacobian,
-                      generalized_forces)
+from .hermite import (H, WQ, HermiteDofs, clamped_slopes, element_fields, extensibility,
+                      extensibility_jacobian, generalized_forces)
 
 
 class HermiteState(eqx.Module):
@@ -196,9 +198,31 @@ def dynamics(line, env, t, q):
     pi = np.concatenate([np.arange(3), 6 * n + np.arange(3)])
     a_p = jnp.concatenate([line.end_a.acceleration(t), line.end_b.acceleration(t)])
     rhs = f.reshape(-1)[fi] - m2[np.ix_(fi, pi)] @ a_p
-    a_f = jnp.linalg.solve(m2[np.ix_(fi, fi)], rhs)
+    clamps = clamped_slopes(line, t)
+    if clamps:
+        a_f = _clamped_solve(m2[np.ix_(fi, fi)], rhs, fi, clamps)
+    else:
+        a_f = jnp.linalg.solve(m2[np.ix_(fi, fi)], rhs)
     a = jnp.zeros(size).at[fi].set(a_f).at[pi].set(a_p).reshape(2 * n + 2, 3)
     return a, f, m2, dofs, tension
+
+
+def _clamped_solve(m_ff, rhs, fi, clamps):
+    """Accelerations of the free unknowns with each clamped slope accelerating
+    along its clamp's direction only (a fixed clamp: its length, the end strain,
+    is the one free component): M a = f restricted to a = B·a_r, Bᵀ M B a_r = Bᵀ f."""
+    k = len(fi)
+    held = {}
+    for node, d in clamps:
+        held[node] = (np.searchsorted(fi, 3 * (2 * node + 1) + np.arange(3)), d)
+    taken = np.concatenate([pos for pos, _ in held.values()])
+    keep = np.setdiff1d(np.arange(k), taken)
+    basis = [jnp.asarray(np.eye(k)[:, keep])]
+    for pos, d in held.values():
+        basis.append(jnp.zeros((k, 1)).at[pos, 0].set(d))
+    b = jnp.concatenate(basis, axis=1)
+    a_r = jnp.linalg.solve(b.T @ m_ff @ b, b.T @ rhs)
+    return b @ a_r
 
 
 def state_rate(line, env, t, q):

@@ -21,8 +21,10 @@ unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on th
   from the turning of the tangent between its two segments, κ_k = |κb_k|/l with
   κb = 2·t_{k−1}×t_k/(1 + t_{k−1}·t_k) (|κb| = 2·tan(θ/2) ≈ θ, the discrete
   curvature of elastic rods, smooth through the straight state), in the beam
-  energy ½·EI·κ²·l per node; forces are minus its gradient. End nodes carry no
-  moment (pinned ends).
+  energy ½·EI·κ²·l per node; forces are minus its gradient. An end node carries
+  no moment (a pin) unless its end is clamped
+  (:class:`~moorjax.model.ends.AbstractClampedEnd`): then the turning from the
+  clamp's direction to the end segment adds EI·|κb|²/l (:func:`clamp_energy`).
 
 Absent structure (no drag, no seabed, no current, no waves) is never traced.
 """
@@ -111,7 +113,7 @@ class LinearElement(AbstractElement):
         if env.seabed is not None:
             force = force + _seabed(lt, env, r, v, node_len)
         if lt.ei is not None:
-            force = force + _bending(lt.ei, line.segment_length, r)
+            force = force + _bending(lt.ei, line.segment_length, r, *_clamp_directions(line, t))
         return force
 
     def accelerations(self, line, env, t, r, v):
@@ -140,11 +142,47 @@ def bending_energy(ei, l, r):
     return 0.5 * ei / l * jnp.sum(kb2)
 
 
-def _bending(ei, l, r):
-    """Bending forces (n+1, 3) [N]: minus the gradient of :func:`bending_energy`."""
+def clamp_energy(ei, l, direction, tangent):
+    """Bending energy EI·|κb|²/l [J] at a clamped end node.
+
+    ``direction``: the clamp's unit vector continued through the end (for end B
+    the reverse of the direction in which the line leaves it); ``tangent``: the
+    end segment's unit tangent along the line (A to B). A mirrored ghost segment
+    beyond the clamp turns by twice the angle θ between them, over the end node's
+    half length l/2: ½·EI·(2θ/l)²·l/2 = EI·θ²/l, the curvature 2θ/l being
+    MoorDyn's end curvature 4·sin(θ/2)/l at a line end held by a rod (its
+    ``CANTILEVERED`` end type) to leading order; |κb| = 2·tan(θ/2) as at the
+    interior nodes keeps it smooth at θ = 0.
+    """
+    cross = jnp.cross(direction, tangent)
+    dot = jnp.sum(direction * tangent, axis=-1)
+    return ei / l * 4.0 * jnp.sum(cross * cross, axis=-1) / (1.0 + dot) ** 2
+
+
+def _clamp_directions(line, t):
+    """The clamps' directions along the line (A to B) at its ends: ``(d_a, d_b)``,
+    ``None`` for an end that is not clamped (structure, decided at trace time)."""
+    from ..model.ends import AbstractClampedEnd
+
+    d_a = line.end_a.direction(t) if isinstance(line.end_a, AbstractClampedEnd) else None
+    d_b = -line.end_b.direction(t) if isinstance(line.end_b, AbstractClampedEnd) else None
+    return d_a, d_b
+
+
+def _bending(ei, l, r, d_a=None, d_b=None):
+    """Bending forces (n+1, 3) [N]: minus the gradient of :func:`bending_energy`
+    and, at clamped ends (``d_a``/``d_b`` not ``None``), of :func:`clamp_energy`."""
     import jax
 
-    return -jax.grad(bending_energy, argnums=2)(ei, l, r)
+    def energy(r):
+        e = bending_energy(ei, l, r)
+        if d_a is not None:
+            e = e + clamp_energy(ei, l, d_a, safe_unit(r[1] - r[0])[0])
+        if d_b is not None:
+            e = e + clamp_energy(ei, l, safe_unit(r[-1] - r[-2])[0], d_b)
+        return e
+
+    return -jax.grad(energy)(r)
 
 
 def _drag(lt, env, u, tangent, stretched):

@@ -6,8 +6,10 @@ from .axial import LinearEA as LinearEA
 from .axial import PolyesterMBL as PolyesterMBL
 from .axial import PolyesterWu as PolyesterWu
 from .axial import TabulatedEA as TabulatedEA
+from .ends import AbstractClampedEnd as AbstractClampedEnd
 from .ends import AbstractEnd as AbstractEnd
 from .ends import BodyEnd as BodyEnd
+from .ends import ClampedEnd as ClampedEnd
 from .ends import FixedEnd as FixedEnd
 from .ends import KinematicEnd as KinematicEnd
 from .ends import SinePath as SinePath
@@ -33,6 +35,7 @@ from .waves import wave_number as wave_number
 
 __all__ = [
     'AbstractAxialLaw',
+    'AbstractClampedEnd',
     'AbstractCurrent',
     'AbstractEnd',
     'AddedMass',
@@ -41,6 +44,7 @@ __all__ = [
     'Environment',
     'Bathymetry',
     'BodyEnd',
+    'ClampedEnd',
     'FixedEnd',
     'GridAiryWaves',
     'IrregularWave',

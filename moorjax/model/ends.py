@@ -9,6 +9,7 @@ from __future__ import annotations
 import abc
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
@@ -225,3 +226,52 @@ class TabulatedPath(AbstractEnd):
         i, h, s = self._locate(t)
         return ((12 * s - 6) * (self.r[i] - self.r[i + 1]) / h
                 + (6 * s - 4) * self.v[i] + (6 * s - 2) * self.v[i + 1]) / h
+
+
+class AbstractClampedEnd(AbstractEnd):
+    """An end that holds the line's direction as well as its position.
+
+    A line with bending stiffness EI carries an end moment there; without EI a
+    clamp is a pin (a cable has no moment to hold). ``direction(t)`` is the
+    unit vector in which the line leaves the end — from end A that is the
+    tangent dr/ds, from end B it is −dr/ds — so the same end object clamps
+    either end of a line.
+    """
+
+    @abc.abstractmethod
+    def direction(self, t) -> Array:
+        """(3,) unit vector [-] along which the line leaves the end."""
+
+
+class ClampedEnd(AbstractClampedEnd):
+    """A fixed clamp at ``point`` (3,) [m] holding the line along ``direction`` (3,).
+
+    ``direction`` is normalised here; it points from the clamp into the line
+    (for a horizontal cantilever from end A along +x: ``(1, 0, 0)``).
+    """
+
+    point: Array
+    unit: Array
+
+    def __init__(self, point, direction):
+        check_finite(point, "end position", "m")
+        check_finite(direction, "clamp direction", "-")
+        d = jnp.asarray(direction, dtype=float).reshape(3)
+        norm = jnp.linalg.norm(d)
+        if not isinstance(norm, jax.core.Tracer) and float(norm) == 0.0:
+            raise ValueError("ClampedEnd: direction = (0, 0, 0) has no direction; give the unit "
+                             "vector along which the line leaves the clamp, e.g. (1, 0, 0)")
+        self.point = jnp.asarray(point, dtype=float).reshape(3)
+        self.unit = d / norm
+
+    def position(self, t):
+        return self.point
+
+    def velocity(self, t):
+        return jnp.zeros(3)
+
+    def acceleration(self, t):
+        return jnp.zeros(3)
+
+    def direction(self, t):
+        return self.unit
