@@ -66,10 +66,17 @@ CASES = {
 }
 
 
-def case_scene(case: str, n_segments: int, amplitude: float | None = None):
-    """Scene of reference case ``case`` with N segments, fairlead on its sine path."""
+def case_scene(case: str, n_segments: int, amplitude: float | None = None, element=None):
+    """Scene of reference case ``case`` with N segments (elements), fairlead on its
+    sine path; ``element``: ``None`` (linear), ``"hermite"`` or an element object."""
     c = CASES[case]
-    scene = build_scene(read_deck(example_path(c.deck)), segments=n_segments)
+    if element == "hermite":
+        from moorjax.element import HermiteElement
+
+        element = HermiteElement()
+    elif element == "linear":
+        element = None
+    scene = build_scene(read_deck(example_path(c.deck)), segments=n_segments, element=element)
     amp = c.amplitude if amplitude is None else amplitude
     path = mj.SinePath(c.centre, [amp, 0.0, 0.0], c.period)
     return eqx.tree_at(lambda s: s.lines[0].end_b, scene, path)

@@ -14,7 +14,10 @@ standard deviation, and the number of steps.
   pairs (rtol, atol [m]) = (1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)
   (``atol_velocity`` = 100·atol m/s, moorjax's default); implicit_euler with
   fixed steps; heun with fixed steps at MoorDyn's RK2 stability limit for that N
-  (and half of it).
+  (and half of it);
+- with ``--elements linear hermite``, also moorjax with Wu et al.'s Hermite-cubic
+  element (``HERMITE_NS`` elements, kvaerno5/kvaerno3 at the middle tolerance pair),
+  drawn in its own colour on the same work–precision plot.
 
 Then the cheapest run of each code (and of each method) at ≤ 1 %, 0.5 % and
 0.1 % error, with the time ratio. The references are good to about 0.3 % (see
@@ -23,7 +26,7 @@ of reach.
 
     python benchmarks/vs_moordyn.py [--cases A B] [--duration 20] [--quick]
                                     [--json out.json] [--plot out.png]
-                                    [--reference DIR]
+                                    [--reference DIR] [--elements linear hermite]
 
 The reference data is looked for in --reference DIR, else $MOORJAX_REFERENCE_DIR (default
 ../shared/reference relative to the repository); without it the error column
@@ -61,6 +64,9 @@ TOLS = [(1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)]
 #: references are good to about 0.3 %, so 0.1 % is not reachable with them)
 LEVELS = (0.01, 0.005, 0.001)
 NS = [10, 20, 40, 80]
+#: Hermite elements per line (each carries slopes and a tension field: ~2.5× the
+#: unknowns of a linear segment)
+HERMITE_NS = [5, 10, 20]
 #: used when the reference cost table is missing: (N, scheme, dtM [s])
 MOORDYN_FALLBACK = {
     "A": [(10, "rk2", 6.25e-3), (20, "rk2", 3.125e-3), (40, "rk2", 3.125e-3), (40, "rk4", 4.167e-3),
@@ -99,7 +105,19 @@ def rk2_limit(table, case, n):
     return max(dts) if dts else None
 
 
-def moorjax_plan(case, quick, table):
+def moorjax_plan(case, quick, table, elements=("linear",)):
+    """[(N, solver, (rtol, atol) or None, dt or None, element)]."""
+    runs = []
+    if "linear" in elements:
+        runs += [r + ("linear",) for r in _linear_plan(case, quick, table)]
+    if "hermite" in elements:
+        ns = [10] if quick else HERMITE_NS
+        solvers = ["kvaerno5"] if quick else ["kvaerno3", "kvaerno5"]
+        runs += [(n, s, TOLS[1], None, "hermite") for n in ns for s in solvers]
+    return runs
+
+
+def _linear_plan(case, quick, table):
     if quick:
         return QUICK["moorjax"][case]
     runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5") for tol in TOLS]
@@ -111,7 +129,7 @@ def moorjax_plan(case, quick, table):
     return runs
 
 
-def run_case(case, duration, quick):
+def run_case(case, duration, quick, elements=("linear",)):
     c = CASES[case]
     ref_csv = reference_csv(case)
     table = moordyn_table()
@@ -122,7 +140,7 @@ def run_case(case, duration, quick):
         r = run_moordyn(example_path(c.deck), c.path(), duration, n_segments=n, dt=dt, scheme=scheme)
         ok = r["status"] == "ok"
         err = rel_rms_error(r["t"], r["tension"], ref_csv) if (ref_csv and ok) else None
-        rows.append(dict(case=case, code="MoorDyn", N=n, method=scheme, setting=f"dtM {1e3 * dt:.4g} ms",
+        rows.append(dict(case=case, code="MoorDyn", N=n, method=scheme, element="lumped mass", setting=f"dtM {1e3 * dt:.4g} ms",
                          outcome="ok" if ok else "unstable", ms_per_sim_s=r["ms_per_sim_s"],
                          cpu_ms_per_sim_s=r["cpu_ms_per_sim_s"], compile_s=0.0,
                          statics_s=r["init_s"], rel_err=err, steps=int(round(duration / dt)),
@@ -130,11 +148,11 @@ def run_case(case, duration, quick):
         print(_line(rows[-1]), flush=True)
 
     inits = {}
-    for n, solver, tol, dt in moorjax_plan(case, quick, table):
-        scene = case_scene(case, n)
-        if n not in inits:
-            inits[n] = static_init(scene)
-        kw = dict(solver=solver, init=inits[n])
+    for n, solver, tol, dt, element in moorjax_plan(case, quick, table, elements):
+        scene = case_scene(case, n, element=element)
+        if (n, element) not in inits:
+            inits[n, element] = static_init(scene)
+        kw = dict(solver=solver, init=inits[n, element])
         if tol is not None:
             kw.update(rtol=tol[0], atol=tol[1])
             setting = f"tol {tol[0]:.0e}/{tol[1]:.0e}"
@@ -149,14 +167,19 @@ def run_case(case, duration, quick):
         if r["outcome"] != "ok":
             r["ms_per_sim_s"] = float("nan")
         rows.append(dict(case=case, code="moorjax", N=n, method=solver, setting=setting,
-                         rel_err=err, cpu_ms_per_sim_s=cpu, **r))
+                         element=element, rel_err=err, cpu_ms_per_sim_s=cpu, **r))
         print(_line(rows[-1]), flush=True)
     return rows
 
 
+def _label(r):
+    """moorjax, moorjax hermite or MoorDyn."""
+    return r["code"] + (" hermite" if r.get("element") == "hermite" else "")
+
+
 def _line(r):
     err = "   n/a  " if r["rel_err"] is None else f"{100 * r['rel_err']:7.3f}%"
-    return (f"  {r['case']} {r['code']:>8} N={r['N']:<3d} {r['method']:>14} {r['setting']:>18} "
+    return (f"  {r['case']} {_label(r):>16} N={r['N']:<3d} {r['method']:>14} {r['setting']:>18} "
             f"{r['ms_per_sim_s']:9.2f} ms/sim-s  compile {r['compile_s']:5.1f} s  err {err}  "
             f"{r['outcome'][:50]}")
 
@@ -167,7 +190,7 @@ def cheapest(rows, case, level, key="ms_per_sim_s", by="code"):
     for r in rows:
         if (r["case"] == case and r["outcome"] == "ok" and r["rel_err"] is not None
                 and r["rel_err"] <= level and np.isfinite(r[key])):
-            k = r[by] if by == "code" else (r["code"], r["method"])
+            k = r[by] if by == "code" else (_label(r), r["method"])
             if k not in out or r[key] < out[k][key]:
                 out[k] = r
     if by == "code":
@@ -220,11 +243,12 @@ def plot(rows, cases, path):
     markers = {"rk2": "o", "rk4": "D", "midpoint5": "v", "kvaerno3": "s", "kvaerno5": "^",
                "implicit_euler": "P", "heun": "x"}
     for ax, case in zip(axes[0], cases):
-        for code, colour in (("MoorDyn", "tab:blue"), ("moorjax", "tab:red")):
-            methods = sorted({r["method"] for r in rows if r["case"] == case and r["code"] == code})
+        for code, colour in (("MoorDyn", "tab:blue"), ("moorjax", "tab:red"),
+                             ("moorjax hermite", "tab:green")):
+            methods = sorted({r["method"] for r in rows if r["case"] == case and _label(r) == code})
             for m in methods:
                 pts = [(r["rel_err"], r["ms_per_sim_s"], r["N"]) for r in rows
-                       if r["case"] == case and r["code"] == code and r["method"] == m
+                       if r["case"] == case and _label(r) == code and r["method"] == m
                        and r["rel_err"] is not None and np.isfinite(r["ms_per_sim_s"])]
                 if not pts:
                     continue
@@ -236,7 +260,7 @@ def plot(rows, cases, path):
                                 textcoords="offset points")
         for lvl in (1.0, 0.1):
             ax.axvline(lvl, color="grey", lw=0.5, ls="--")
-        ax.set(title=f"case {case} (numbers: segments)", xlabel="RMS tension error / reference std [%]",
+        ax.set(title=f"case {case} (numbers: segments or elements)", xlabel="RMS tension error / reference std [%]",
                ylabel="wall ms per simulated s")
         ax.legend(fontsize=7)
     fig.tight_layout()
@@ -249,15 +273,17 @@ def main(argv=None):
     p.add_argument("--cases", nargs="+", default=["A", "B"], choices=list(CASES))
     p.add_argument("--duration", type=float, default=20.0, help="simulated seconds (default 20)")
     p.add_argument("--plot", metavar="PATH", help="write a work-precision plot (PNG)")
+    p.add_argument("--elements", nargs="+", default=["linear"], choices=["linear", "hermite"],
+                   help="moorjax elements to run (default: linear)")
     args = p.parse_args(argv)
     print(f"work–precision, {args.duration:g} s simulated" + (" (--quick)" if args.quick else ""))
     print(NOISE_NOTE)
     rows = []
     for case in args.cases:
-        rows += run_case(case, args.duration, args.quick)
+        rows += run_case(case, args.duration, args.quick, args.elements)
     for case in args.cases:
         print_table([r for r in rows if r["case"] == case], [
-            ("code", "code", ""), ("N", "N", "d"), ("method", "method", ""),
+            ("code", _label, ""), ("N", "N", "d"), ("method", "method", ""),
             ("setting", "setting", ""), ("outcome", lambda r: r["outcome"][:44], ""),
             ("ms/sim-s", "ms_per_sim_s", ".2f"), ("cpu ms/sim-s", "cpu_ms_per_sim_s", ".2f"),
             ("compile [s]", "compile_s", ".1f"),
