@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..currents import CURRENT_FILES, read_current_profile, read_dynamic_current_profile
+from ..currents import CURRENT_FILES, read_current_grid_4d, read_current_profile, read_dynamic_current_profile
 from ..waves import read_deck_waves
 from ..errors import InputWarning
 from ..seafloor import read_seafloor
@@ -100,13 +100,13 @@ def _parse(text: str, ctx: Context) -> Deck:
 
 
 def _read_current(ctx: Context, options: dict[str, float | str], option_lines: dict[str, int]):
-    """The current profile of ``Currents`` 1 or 2: the file MoorDyn-C reads from the deck's folder."""
+    """The current of ``Currents`` 1, 2 or 5: the file MoorDyn-C reads from the deck's folder."""
     mode = int(options.get("Currents", 0))
     if not mode:
         return None
     origin = f"{ctx.path}:{option_lines['Currents']}: OPTIONS: Currents = {mode}"
     side = Path(ctx.path).parent / CURRENT_FILES[mode]
-    reader = read_current_profile if mode == 1 else read_dynamic_current_profile
+    reader = {1: read_current_profile, 2: read_dynamic_current_profile, 5: read_current_grid_4d}[mode]
     return reader(side, origin)
 
 
