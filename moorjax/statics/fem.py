@@ -24,6 +24,7 @@ import equinox as eqx
 import jax
 import jax.lax as lax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
 import optimistix as optx
 from jaxtyping import Array
@@ -32,6 +33,7 @@ from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
+from ..linalg.undetermined import MinimumNorm
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
 
@@ -339,6 +341,25 @@ def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
     return lax.cond(ok, lambda: out, fem)
 
 
+@eqx.filter_custom_jvp
+def _implicit(r_free, line, env, t):
+    """``r_free``, an equilibrium of ``_residual(line, env, t)``, with the
+    implicit-function derivative ṙ = −J⁺·∂F/∂θ·θ̇ attached (J⁺: the minimum-norm
+    solve of :class:`~moorjax.linalg.undetermined.MinimumNorm`)."""
+    return r_free
+
+
+@_implicit.def_jvp
+def _implicit_jvp(primals, tangents):
+    r_free, line, env, t = primals
+    _, t_line, t_env, t_t = tangents
+    _, b_dot = eqx.filter_jvp(lambda ln, e, tt: _residual(ln, e, tt)(r_free, None), (line, env, t),
+                              (t_line, t_env, t_t))
+    op = lx.JacobianLinearOperator(_residual(line, env, t), r_free)
+    r_dot = -lx.linear_solve(op, b_dot, MinimumNorm()).value
+    return r_free, r_dot
+
+
 @StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
@@ -365,14 +386,20 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
                                      _band_step if banded else _dense_step)
     solver = (optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver()) if banded
               else optx.Newton(rtol=rtol, atol=atol))
-    sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
+    # the implicit derivative of an undetermined shape (a slack weightless line: J
+    # singular) is the minimum-norm one, and zero where J is not finite (a failed
+    # polish), rather than aborting the solve (moorjax.linalg.undetermined)
+    sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False,
+                         adjoint=optx.ImplicitAdjoint(linear_solver=MinimumNorm()))
     # A polish that fails (NaN where the Jacobian is singular: slack line piled on
     # the bed) or does worse leaves the descent's iterate; either is judged by its
     # force imbalance alone.
     res_start = jnp.max(jnp.abs(fn(r_start, None)))
     res_polish = jnp.max(jnp.abs(fn(sol.value, None)))
     polished = jnp.all(jnp.isfinite(sol.value)) & (res_polish <= jnp.maximum(res_start, tol(r_start)))
-    r_free = jnp.where(polished, sol.value, r_start)
+    # where the polish failed, the descent's iterate gets the implicit-function
+    # derivative too (never the one of the descent's iterations)
+    r_free = jnp.where(polished, sol.value, _implicit(lax.stop_gradient(r_start), line, env, t))
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element
