@@ -493,3 +493,10 @@ def test_all_warnings_carry_file_and_line(tmp_path):
     assert len(deck.warnings) == 2
     for w in deck.warnings:
         assert re.search(r"case\.dat:\d+: ", w), w
+
+
+def test_deck_without_lines_is_refused_naming_what_is_missing():
+    # MoorDyn's tests/Mooring/rotations/nwu.txt: a coupled body with three points, no lines
+    with pytest.raises(InputError, match=r"nwu.txt: the deck has no LINE TYPES and no LINES section "
+                                         r"\(sections found: BODIES, OPTIONS, POINTS\).*add a LINES section"):
+        read_deck(DATA / "public" / "nwu.txt")

@@ -79,6 +79,14 @@ def _parse(text: str, ctx: Context) -> Deck:
     seafloor = read_seafloor(options["SeafloorFile"]) if "SeafloorFile" in options else None
     _check_unsupported(ctx, sections)
 
+    if "LINE TYPES" not in sections and "LINES" not in sections:
+        found = ", ".join(sorted(sections)) or "none"
+        raise ctx.error(
+            None,
+            f"the deck has no LINE TYPES and no LINES section (sections found: {found}), so no mooring "
+            "lines; MoorDyn accepts such a deck and only moves its bodies and points, but moorjax models "
+            "lines and has nothing to solve without them; add a LINES section and the LINE TYPES it uses",
+        )
     line_types = parse_line_types(ctx, sections.get("LINE TYPES"))
     bodies = parse_bodies(ctx, sections.get("BODIES"))
     points = parse_points(ctx, sections.get("POINTS"), bodies)
