@@ -203,8 +203,10 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             where = "--segments 1" if segments is not None else (
                 f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1")
             raise InputError(
-                f"{where}: a line of one segment has no free node, which moorjax's static and "
-                "implicit solvers do not support yet; give NumSegs >= 2 (or --segments N >= 2)")
+                f"{where}: a line of one segment has no free node (MoorDyn makes it a spring-damper "
+                "between its two ends); moorjax does not support it yet: its line statics solve for the "
+                "free nodes and its dynamic state would hold none, which the static and implicit "
+                "solvers do not handle; give NumSegs >= 2 (or --segments N >= 2)")
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
