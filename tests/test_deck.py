@@ -493,3 +493,22 @@ def test_all_warnings_carry_file_and_line(tmp_path):
     assert len(deck.warnings) == 2
     for w in deck.warnings:
         assert re.search(r"case\.dat:\d+: ", w), w
+
+
+def test_deck_without_lines_is_refused_naming_what_is_missing():
+    # MoorDyn's tests/Mooring/rotations/nwu.txt: a coupled body with three points, no lines
+    with pytest.raises(InputError, match=r"nwu.txt: the deck has no LINE TYPES and no LINES section "
+                                         r"\(sections found: BODIES, OPTIONS, POINTS\).*add a LINES section"):
+        read_deck(DATA / "public" / "nwu.txt")
+
+
+def test_one_segment_line_is_refused_naming_why():
+    from moorjax.io import build_scene
+
+    text = CASE_A.read_text()
+    assert "1  main  1  2  902.2  160  -" in text
+    deck = parse_deck(text.replace("1  main  1  2  902.2  160  -", "1  main  1  2  902.2  1  -"), "one.dat")
+    assert deck.lines[0].n_segments == 1
+    with pytest.raises(InputError, match=r"one.dat:\d+: LINES id 1: NumSegs = 1: a line of one segment has no "
+                                         r"free node .*spring-damper.*give NumSegs >= 2"):
+        build_scene(deck)

@@ -80,7 +80,6 @@ def test_dynamic_profile_file_layout(tmp_path):
 
 @pytest.mark.parametrize("mode, msg", [
     (3, "not implemented in MoorDyn v2 either"),
-    (5, "4-D current grids .* not supported yet"),
     (7, "not a MoorDyn current mode"),
 ])
 def test_unsupported_current_modes_are_refused(tmp_path, mode, msg):

@@ -120,3 +120,35 @@ def test_line_resting_on_a_sloped_seabed_matches_moorpy_inclined_catenary():
     assert info["LBot"] > 30  # a third of the line lies on the slope
     np.testing.assert_allclose(float(st.tension_b), np.hypot(fbh, fbv), rtol=1e-3)
     np.testing.assert_allclose(float(st.tension_a), np.hypot(fah, fav), rtol=1e-3)
+
+
+@pytest.mark.slow
+def test_moordyn_pendulum_deck_settles_on_the_slope():
+    """MoorDyn's ``tests/Mooring/seafloor.txt``: a 10 kg point on a 32 m line as
+    dense as the water, from a fixed point at the surface, starting on the seabed
+    (z_b = -30 + 0.2·x m) with the line slack. Nothing holds the point along the
+    frictionless slope until the line is taut, so it slides down to where the
+    sphere of radius L around the anchor meets the bed; there its weight W, the
+    bed's normal reaction N·n and the line's pull T·u balance:
+    T = W·n_x/(n_x·u_z − n_z·u_x) with u the unit vector to the anchor.
+    (The static solve once stopped: the slack weightless line's shape, and so
+    its implicit derivative, is undetermined; see moorjax.linalg.undetermined.)"""
+    from moorjax.statics import solve_system_statics
+
+    scene = build_scene(read_deck(DATA / "pendulum.txt"))
+    st = solve_system_statics(scene)
+    assert st.converged
+    p = np.asarray(scene.bodies[0].origin + st.poses[0, :3])
+    anchor, length = np.array([0.0, -1.0, 0.0]), 32.0
+    # the lowest point of the circle |p - anchor| = L on the plane z = -30 + 0.2 x
+    a, b, c = 1.0 + 0.2**2, -2 * 0.2 * 30.0, 30.0**2 - length**2
+    x = (-b - np.sqrt(b * b - 4 * a * c)) / (2 * a)
+    np.testing.assert_allclose(p, [x, -1.0, -30.0 + 0.2 * x], atol=2e-3)  # bed penetration 0.2 mm
+    n = np.array([-0.2, 0.0, 1.0]) / np.hypot(0.2, 1.0)
+    u = (anchor - p) / np.linalg.norm(anchor - p)
+    weight = 10.0 * 9.80665
+    tension = weight * -n[0] / (-n[0] * u[2] + n[2] * u[0])
+    seg = np.asarray(st.lines[0].tensions)
+    np.testing.assert_allclose(seg[[0, -1]], tension, rtol=1e-3)  # weightless: uniform
+    # the line's end node carries the bed reaction too: the point's whole weight
+    np.testing.assert_allclose(np.asarray(st.mooring[0, :3]), [0.0, 0.0, weight], rtol=1e-6, atol=1e-3)

@@ -123,14 +123,14 @@ class ConnectionPoint(AbstractBody):
         pose, vel, _ = self.split(z)
         f = self._static_force(env)[:3] + mooring[:3]
         u = vel[:3]
-        z_current = self.origin[2] + pose[2]
+        pos = self.origin + pose[:3]
+        pos_current = pos
         if env is not None and env.waves is not None:  # drag on the wave velocity (MoorDyn's Point)
-            pos = self.origin + pose[:3]
             eta, u_wave, _ = env.waves.kinematics(pos, t)
             u = u - u_wave
-            z_current = env.waves.current_height(pos, eta)
+            pos_current = pos.at[2].set(env.waves.current_height(pos, eta))
         if self.current is not None:
-            u = u - self.current.velocity(z_current, t)
+            u = u - self.current.velocity_at(pos_current, t)
         rho, _ = self._water(env)
         f = f - 0.5 * rho * self.cda * abs_times(u)
         acc = f / (self.mass + self.added)
@@ -144,7 +144,7 @@ class ConnectionPoint(AbstractBody):
         f = -self.hydrostatic @ pose + self._static_force(env)
         if loads and self.current is not None:
             rho, _ = self._water(env)
-            u = self.current.velocity(self.origin[2] + pose[2], t)
+            u = self.current.velocity_at(self.origin + pose[:3], t)
             f = f.at[:3].add(0.5 * rho * self.cda * abs_times(u))
         return f
 

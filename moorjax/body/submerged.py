@@ -241,14 +241,14 @@ class SubmergedBody(AbstractBody):
         and (with ``env.waves``) the wave particle velocity at the reference point."""
         rot = self.rotation(pose)
         u = -velocity[:3]
-        z_current = self.origin[2] + pose[2]
+        pos = self.origin + pose[:3]
+        pos_current = pos
         if env is not None and env.waves is not None:  # MoorDyn's body kinematics at its reference point
-            pos = self.origin + pose[:3]
             eta, u_wave, _ = env.waves.kinematics(pos, t)
             u = u + u_wave
-            z_current = env.waves.current_height(pos, eta)
+            pos_current = pos.at[2].set(env.waves.current_height(pos, eta))
         if self.current is not None:
-            u = u + self.current.velocity(z_current, t)
+            u = u + self.current.velocity_at(pos_current, t)
         f = 0.5 * self.rho * rot @ (self.cda[:3] * (rot.T @ abs_times(u)))
         m = 0.5 * self.rho * rot @ (self.cda[3:] * (rot.T @ abs_times(-velocity[3:])))
         return jnp.concatenate([f, m])

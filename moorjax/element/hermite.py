@@ -152,7 +152,7 @@ def _distributed_load(line, env, r, d1, t, v=None):
     if lt.drag is not None and (env.current is not None or v is not None):
         u = jnp.zeros_like(r) if v is None else v
         if env.current is not None:
-            u = u - env.current.velocity(r[..., 2].reshape(-1), t).reshape(r.shape)
+            u = u - env.current.velocity_at(r, t)
         stretch = safe_norm(d1)[..., None]
         tangent = d1 / jnp.maximum(stretch, 1e-300)
         ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent

@@ -92,17 +92,17 @@ class LinearElement(AbstractElement):
         force = force.at[:, 2].add(-weight * node_len)
 
         wave_u = wave_a = None
-        z_current = r[:, 2]
+        r_current = r
         if env.waves is not None:
             eta, wave_u, wave_a = env.waves.kinematics(r, t)
-            z_current = env.waves.current_height(r, eta)
+            r_current = r.at[:, 2].set(env.waves.current_height(r, eta))
             force = force + _to_nodes(
                 _fluid_inertia(lt, env, wave_a[:-1], tangent, stretched),
                 _fluid_inertia(lt, env, wave_a[1:], tangent, stretched),
             )
 
         if lt.drag is not None:
-            u = v if env.current is None else v - env.current.velocity(z_current, t)
+            u = v if env.current is None else v - env.current.velocity_at(r_current, t)
             if wave_u is not None:
                 u = u - wave_u
             force = force + _to_nodes(

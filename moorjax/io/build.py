@@ -27,9 +27,10 @@ MoorDyn conventions kept (so a deck means the same in both codes):
   ``coupledpinned`` bodies are refused (:func:`build_scene` says why and what to
   do instead); a body's mass, CG, inertia, volume, CdA and Ca are not used.
 
-- Currents (``Currents`` 1, 2): the depth profile MoorDyn reads from
-  ``current_profile.txt`` / ``current_profile_dynamic.txt`` becomes the
-  environment's current; line drag acts on the velocity relative to it.
+- Currents (``Currents`` 1, 2, 5): the depth profile MoorDyn reads from
+  ``current_profile.txt`` / ``current_profile_dynamic.txt``, or the 4-D grid
+  of ``current_profile_4d.txt``, becomes the environment's current; the drag
+  on lines, free points and bodies acts on the velocity relative to it.
 - Waves (``WaveKin`` 2, 3, 7): the components read from MoorDyn's wave files
   (:mod:`moorjax.io.waves`) become the environment's :class:`AiryWaves`, summed
   at the line nodes (drag on the velocity relative to current plus waves, and
@@ -60,6 +61,7 @@ from ..model import (
     Environment,
     FixedEnd,
     GridAiryWaves,
+    GridCurrent,
     IrregularWave,
     Line,
     LinearEA,
@@ -201,8 +203,10 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             where = "--segments 1" if segments is not None else (
                 f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1")
             raise InputError(
-                f"{where}: a line of one segment has no free node, which moorjax's static and "
-                "implicit solvers do not support yet; give NumSegs >= 2 (or --segments N >= 2)")
+                f"{where}: a line of one segment has no free node (MoorDyn makes it a spring-damper "
+                "between its two ends); moorjax does not support it yet: its line statics solve for the "
+                "free nodes and its dynamic state would hold none, which the static and implicit "
+                "solvers do not handle; give NumSegs >= 2 (or --segments N >= 2)")
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
@@ -314,13 +318,17 @@ def deck_current(deck: Deck):
 
     ``Currents = 1``: a :class:`ProfileCurrent` (linear in z, held beyond the
     ends, as MoorDyn's steady current grid); ``Currents = 2``: a
-    :class:`TimeProfileCurrent` (linear in z and t, held beyond the ends).
+    :class:`TimeProfileCurrent` (linear in z and t, held beyond the ends);
+    ``Currents = 5``: a :class:`GridCurrent` (linear in x, y, z and t, held
+    beyond the grid).
     """
     cur = deck.current
     if cur is None:
         return None
     if cur.mode == 1:
         return ProfileCurrent(cur.z, cur.velocity)
+    if cur.mode == 5:
+        return GridCurrent(cur.x, cur.y, cur.z, cur.t, cur.velocity)
     return TimeProfileCurrent(cur.t, cur.z, cur.velocity)
 
 

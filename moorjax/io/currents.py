@@ -14,8 +14,26 @@ MoorDyn v2 documents the option and its files in ``docs/inputs.rst``
   every further line is ``t ux_1..ux_k [uy_1..uy_k [uz_1..uz_k]]`` (time [s],
   then all x components by depth, then y, then z; missing components are 0).
   Linear in z and t, held at the ends of both.
-* ``Currents = 3, 4`` are not implemented in MoorDyn either; ``5`` (a 4-D grid
-  from ``current_profile_4d.txt``) is not supported by moorjax yet.
+* ``Currents = 3, 4`` are not implemented in MoorDyn either.
+* ``Currents = 5`` (4-D current grid): ``current_profile_4d.txt``
+  (``docs/waterkinematics.rst``, "Currents = 5 (4D Current Grid)"). Line 1 is
+  ``nx ny nz nt``, lines 2-5 the grid's x [m], y [m], z [m] and t [s] values,
+  and every further line is ``x y z t ux uy uz``: the velocity [m/s] at one
+  grid point, in any order. moorjax matches the coordinates to the grid by
+  value and needs every grid point exactly once. Quadrilinear, held at the
+  grid's edges (:class:`moorjax.model.GridCurrent`).
+
+  Where MoorDyn's code (``construct4DCurrentGrid``, v2.7, commit 319ff99)
+  differs from its docs, moorjax follows the docs and says so here: (1) the
+  code starts reading rows at line 7, so the row on line 6 is dropped and its
+  grid point keeps the velocity 0 (in MoorDyn's public ``wavekin_2`` and
+  ``wavekin_4`` files the corner x = -50, y = -2, z = -30 m at t = 0); (2) it
+  finds a row's grid point by comparing the coordinates as *text* with the
+  header's, an unmatched one silently meaning the first grid value; (3) it
+  resamples the times at the smallest time step from t = 0 and repeats the
+  table past its last time. A file whose rows start on line 6, written with
+  the header's spelling and with evenly spaced times from 0, is read alike by
+  both except for (1).
 
 Pure Python + numpy; no JAX.
 """
@@ -30,7 +48,8 @@ import numpy as np
 from .errors import InputError
 from .table import row_numbers
 
-__all__ = ["DeckCurrent", "read_current_profile", "read_dynamic_current_profile", "CURRENT_FILES"]
+__all__ = ["DeckCurrent", "read_current_profile", "read_dynamic_current_profile", "read_current_grid_4d",
+           "CURRENT_FILES"]
 
 #: ``Currents`` option value -> the file MoorDyn-C reads from the deck's folder.
 CURRENT_FILES = {1: "current_profile.txt", 2: "current_profile_dynamic.txt", 5: "current_profile_4d.txt"}
@@ -41,11 +60,15 @@ class DeckCurrent:
     """A current read from a MoorDyn current file.
 
     Attributes:
-        mode: the deck's ``Currents`` value (1 steady profile, 2 dynamic profile).
+        mode: the deck's ``Currents`` value (1 steady profile, 2 dynamic profile,
+            5 4-D grid).
         path: the file it came from.
         z: (k,) strictly increasing heights [m].
-        velocity: (k, 3) [m/s] for mode 1; (n_t, k, 3) [m/s] for mode 2.
-        t: (n_t,) strictly increasing times [s] for mode 2, else ``None``.
+        velocity: (k, 3) [m/s] for mode 1; (n_t, k, 3) [m/s] for mode 2;
+            (nx, ny, k, n_t, 3) [m/s] for mode 5.
+        t: (n_t,) strictly increasing times [s] for modes 2 and 5, else ``None``.
+        x, y: (nx,), (ny,) strictly increasing grid coordinates [m] for mode 5,
+            else ``None``.
     """
 
     mode: int
@@ -53,6 +76,8 @@ class DeckCurrent:
     z: np.ndarray
     velocity: np.ndarray
     t: np.ndarray | None = None
+    x: np.ndarray | None = None
+    y: np.ndarray | None = None
 
 
 def _check_increasing(path, linenos, values, name, unit):
@@ -129,3 +154,55 @@ def read_dynamic_current_profile(path, origin: str = "") -> DeckCurrent:
         raise InputError(f"{path}: no time rows after line 6")
     _check_increasing(str(path), where, ts, "t", "s")
     return DeckCurrent(2, str(path), np.asarray(z, float), np.asarray(us, float), np.asarray(ts, float))
+
+
+def read_current_grid_4d(path, origin: str = "") -> DeckCurrent:
+    """Read a ``current_profile_4d.txt`` (``Currents = 5``); see the module docstring."""
+    path = Path(path)
+    lines = _read_lines(path, origin or str(path))
+    if len(lines) < 6:
+        raise InputError(f"{path}: {len(lines)} lines; a 4-D current file has 'nx ny nz nt' on line 1, "
+                         "the x, y, z, t grid values on lines 2-5 and then 'x y z t ux uy uz' rows")
+    counts = row_numbers(str(path), 1, lines[0], "grid size row 'nx ny nz nt'")
+    if len(counts) < 4 or any(c < 1 or c != int(c) for c in counts[:4]):
+        raise InputError(f"{path}:1: grid size row {lines[0].strip()!r}; expected four whole numbers "
+                         "'nx ny nz nt' >= 1")
+    sizes = [int(c) for c in counts[:4]]
+    axes = []
+    for k, (name, unit, n) in enumerate(zip("xyzt", ("m", "m", "m", "s"), sizes)):
+        vals = row_numbers(str(path), 2 + k, lines[1 + k], f"grid {name} row (line {2 + k})")
+        if len(vals) != n:
+            raise InputError(f"{path}:{2 + k}: grid {name} row has {len(vals)} values; line 1 says "
+                             f"n{name} = {n}")
+        _check_increasing(str(path), [2 + k] * n, vals, name, unit)
+        axes.append(np.asarray(vals, float))
+    u = np.zeros(tuple(sizes) + (3,))
+    seen = np.zeros(tuple(sizes), dtype=int)
+    for lineno, raw in enumerate(lines[5:], start=6):
+        if not raw.strip():
+            continue
+        vals = row_numbers(str(path), lineno, raw, "4-D current row 'x y z t ux uy uz'")
+        if len(vals) != 7:
+            raise InputError(f"{path}:{lineno}: 4-D current row has {len(vals)} numbers; expected 7: "
+                             "'x [m] y [m] z [m] t [s] ux [m/s] uy [m/s] uz [m/s]'")
+        index = []
+        for name, unit, ax, v in zip("xyzt", ("m", "m", "m", "s"), axes, vals[:4]):
+            tol = 1e-9 * max(1.0, float(np.max(np.abs(ax))))
+            hit = np.flatnonzero(np.abs(ax - v) <= tol)
+            if hit.size == 0:
+                raise InputError(f"{path}:{lineno}: {name} = {v!r} {unit} is not one of the grid's {name} "
+                                 f"values on line {2 + 'xyzt'.index(name)}")
+            index.append(int(hit[0]))
+        index = tuple(index)
+        if seen[index]:
+            raise InputError(f"{path}:{lineno}: grid point (x, y, z, t) = {tuple(vals[:4])} is given again "
+                             f"(first on line {seen[index]})")
+        seen[index] = lineno
+        u[index] = vals[4:]
+    missing = np.argwhere(seen == 0)
+    if missing.size:
+        first = tuple(float(ax[i]) for ax, i in zip(axes, missing[0]))
+        raise InputError(f"{path}: {len(missing)} of the {seen.size} grid points have no row, the first "
+                         f"(x, y, z, t) = {first}; give one 'x y z t ux uy uz' row for each")
+    x, y, z, t = axes
+    return DeckCurrent(5, str(path), z, u, t, x, y)

@@ -59,13 +59,13 @@ def water_velocity(env, r, t):
     import jax.numpy as jnp
 
     u = jnp.zeros_like(r)
-    z = r[:, 2]
+    r_current = r
     if env.waves is not None:
         eta, u_wave, _ = env.waves.kinematics(r, t)
         u = u + u_wave
-        z = env.waves.current_height(r, eta)
+        r_current = r.at[:, 2].set(env.waves.current_height(r, eta))
     if env.current is not None:
-        u = u + env.current.velocity(z, t)
+        u = u + env.current.velocity_at(r_current, t)
     return u
 
 

@@ -15,8 +15,10 @@ from .ends import KinematicEnd as KinematicEnd
 from .ends import SinePath as SinePath
 from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
+from .environment import AbstractDepthCurrent as AbstractDepthCurrent
 from .environment import Bathymetry as Bathymetry
 from .environment import Environment as Environment
+from .environment import GridCurrent as GridCurrent
 from .environment import ProfileCurrent as ProfileCurrent
 from .environment import TimeProfileCurrent as TimeProfileCurrent
 from .environment import Seabed as Seabed
@@ -37,6 +39,7 @@ __all__ = [
     'AbstractAxialLaw',
     'AbstractClampedEnd',
     'AbstractCurrent',
+    'AbstractDepthCurrent',
     'AbstractEnd',
     'AddedMass',
     'AiryWaves',
@@ -56,6 +59,7 @@ __all__ = [
     'MorisonDrag',
     'PolyesterMBL',
     'PolyesterWu',
+    'GridCurrent',
     'ProfileCurrent',
     'TimeProfileCurrent',
     'Scene',

@@ -152,14 +152,30 @@ class Seabed(eqx.Module):
 
 
 class AbstractCurrent(eqx.Module):
-    """A current field U(z, t) [m/s] (steady fields ignore t)."""
+    """A current field U(x, y, z, t) [m/s] (steady fields ignore t).
+
+    The physics samples every current through :meth:`velocity_at`, so a field
+    that varies in x and y (:class:`GridCurrent`) acts on lines, points and
+    bodies as a depth profile does.
+    """
+
+    @abc.abstractmethod
+    def velocity_at(self, position: Array, t=0.0) -> Array:
+        """Current velocity (..., 3) [m/s] at positions (..., 3) [m] and time t [s]."""
+
+
+class AbstractDepthCurrent(AbstractCurrent):
+    """A current that depends on the height z (and time) only: U(z, t) [m/s]."""
 
     @abc.abstractmethod
     def velocity(self, z: Array, t=0.0) -> Array:
         """Current velocity (..., 3) [m/s] at heights z (...) [m] and time t [s]."""
 
+    def velocity_at(self, position, t=0.0):
+        return self.velocity(jnp.asarray(position)[..., 2], t)
 
-class UniformCurrent(AbstractCurrent):
+
+class UniformCurrent(AbstractDepthCurrent):
     """The same current at every depth. ``velocity``: (3,) [m/s]."""
 
     u: Array
@@ -172,7 +188,7 @@ class UniformCurrent(AbstractCurrent):
         return jnp.broadcast_to(self.u, jnp.shape(z) + (3,))
 
 
-class ProfileCurrent(AbstractCurrent):
+class ProfileCurrent(AbstractDepthCurrent):
     """A depth profile, linearly interpolated (held constant beyond its ends).
 
     Args:
@@ -209,7 +225,7 @@ def _bracket(grid, x):
     return i, f
 
 
-class TimeProfileCurrent(AbstractCurrent):
+class TimeProfileCurrent(AbstractDepthCurrent):
     """A depth profile that changes in time (MoorDyn's ``Currents = 2``).
 
     Bilinear in z and t, held at the values of the nearest end beyond the
@@ -248,6 +264,66 @@ class TimeProfileCurrent(AbstractCurrent):
         zf = jnp.ravel(z)
         out = jnp.stack([jnp.interp(zf, self.z, profile[:, i]) for i in range(3)], axis=-1)
         return out.reshape(jnp.shape(z) + (3,))
+
+
+class GridCurrent(AbstractCurrent):
+    """A current tabulated on a 4-D grid (x, y, z, t) (MoorDyn's ``Currents = 5``,
+    ``current_profile_4d.txt``; MoorDyn v2 docs, ``docs/waterkinematics.rst``,
+    "Currents = 5 (4D Current Grid)").
+
+    Linear in each of x, y, z and t between the grid values (quadrilinear), and
+    held at the nearest grid value outside the grid in any of them, as
+    MoorDyn's grids (``interp_factor``/``interp4Vec``). An axis of one value is
+    constant along it. (Beyond the last time MoorDyn's code repeats the table
+    with period n_t·Δt, Δt its smallest time step; moorjax holds the last
+    value, as MoorDyn's docs say for its grids.)
+
+    Args:
+        x: (nx,), y: (ny,), z: (nz,) strictly increasing grid coordinates [m];
+        t: (nt,) strictly increasing times [s];
+        velocity: (nx, ny, nz, nt, 3) current velocities [m/s].
+    """
+
+    x: Array
+    y: Array
+    z: Array
+    t: Array
+    u: Array
+
+    def __init__(self, x, y, z, t, velocity):
+        axes = [jnp.asarray(a, dtype=float) for a in (x, y, z, t)]
+        u = jnp.asarray(velocity, dtype=float)
+        names = (("x", "m"), ("y", "m"), ("z", "m"), ("t", "s"))
+        if any(a.ndim != 1 or a.shape[0] < 1 for a in axes) or u.shape != tuple(
+                a.shape[0] for a in axes) + (3,):
+            raise ValueError("a 4-D current grid needs x (nx,), y (ny,), z (nz,), t (nt,) and velocity "
+                             f"(nx, ny, nz, nt, 3); got {[a.shape for a in axes]}, {u.shape}")
+        for a, (name, unit) in zip(axes, names):
+            check_finite(a, f"current grid {name}", unit)
+            if a.shape[0] > 1 and not bool(jnp.all(jnp.diff(a) > 0)):
+                raise ValueError(f"current grid {name} [{unit}] must be strictly increasing")
+        check_finite(u, "current grid velocity", "m/s")
+        self.x, self.y, self.z, self.t = axes
+        self.u = u
+
+    def velocity_at(self, position, t=0.0):
+        position = jnp.asarray(position, dtype=float)
+        shape = position.shape[:-1]
+        p = position.reshape(-1, 3)
+        it, ft = _bracket(self.t, jnp.asarray(t, dtype=float))
+        jt = jnp.minimum(it + 1, self.t.shape[0] - 1)
+        u = (1.0 - ft) * self.u[:, :, :, it] + ft * self.u[:, :, :, jt]  # (nx, ny, nz, 3) at t
+        for axis, grid in enumerate((self.x, self.y, self.z)):
+            i, f = _bracket(grid, p[:, axis])
+            j = jnp.minimum(i + 1, grid.shape[0] - 1)
+            if axis == 0:
+                u = (1.0 - f)[:, None, None, None] * u[i] + f[:, None, None, None] * u[j]  # (n, ny, nz, 3)
+            else:
+                n = jnp.arange(p.shape[0])
+                lo, hi = u[n, i], u[n, j]  # drop the leading grid axis of this coordinate
+                w = f.reshape((-1,) + (1,) * (lo.ndim - 1))
+                u = (1.0 - w) * lo + w * hi
+        return u.reshape(shape + (3,))
 
 
 class Environment(eqx.Module):

@@ -9,8 +9,9 @@ Without a current these forces are minus the gradient of a convex energy, so a
 regularised Newton iteration with a line search on that energy converges from
 any start, through touchdown and slack kinks (``_descent``). Its Jacobian is
 assembled from 9 coloured JVPs and solved block-tridiagonally (O(n)). A final
-optimistix Newton attaches gradients by the implicit function theorem
-(ImplicitAdjoint), never unrolled iterations.
+optimistix Newton polishes the root; gradients are attached to the answer by
+the implicit function theorem (``_implicit``, a minimum-norm solve where the
+shape is undetermined), never through unrolled iterations.
 
 Seabed friction does not act in statics (the node velocities are zero), as in
 MoorDyn; the analytic catenary does model it (``moorjax.statics.catenary``).
@@ -24,6 +25,7 @@ import equinox as eqx
 import jax
 import jax.lax as lax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
 import optimistix as optx
 from jaxtyping import Array
@@ -32,6 +34,7 @@ from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
+from ..linalg.undetermined import MinimumNorm
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
 
@@ -339,18 +342,46 @@ def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
     return lax.cond(ok, lambda: out, fem)
 
 
+def _values(tree):
+    """``tree`` with every array's derivative stopped (the search for a root)."""
+    return jax.tree.map(lambda x: lax.stop_gradient(x) if eqx.is_array(x) else x, tree)
+
+
+@eqx.filter_custom_jvp
+def _implicit(r_free, line, env, t):
+    """``r_free``, an equilibrium of ``_residual(line, env, t)``, with the
+    implicit-function derivative ṙ = −J⁻¹·∂F/∂θ·θ̇ attached. J⁻¹ is the
+    solve of :class:`~moorjax.linalg.undetermined.MinimumNorm`: LU, or where J is
+    singular (the undetermined shape of a slack weightless line) the
+    minimum-norm solution, or zero where J is not finite; it never raises."""
+    return r_free
+
+
+@_implicit.def_jvp
+def _implicit_jvp(primals, tangents):
+    r_free, line, env, t = primals
+    _, t_line, t_env, t_t = tangents
+    _, b_dot = eqx.filter_jvp(lambda ln, e, tt: _residual(ln, e, tt)(r_free, None), (line, env, t),
+                              (t_line, t_env, t_t))
+    op = lx.JacobianLinearOperator(_residual(line, env, t), r_free)
+    r_dot = -lx.linear_solve(op, b_dot, MinimumNorm()).value
+    return r_free, r_dot
+
+
 @StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     r0 = initial_guess(line, env, t).r if init is None else init.r
-    fn = _residual(line, env, t)
     # 1) a regularised Newton descent on the static energy (``_descent``) finds the
     #    equilibrium from the catenary guess with the true (tension-only) law: it
     #    cannot stall on the touchdown or slack kinks, and stops 100× below the
     #    force imbalance that counts as converged (never below what float64
     #    resolves: positions carry eps·|r| of rounding). 2) optimistix's Newton,
-    #    started there, polishes it and attaches implicit-function gradients.
+    #    started there, polishes it. Both search on values only; the answer gets
+    #    its derivative from the implicit function theorem once, however it was
+    #    found (``_implicit``: never the derivative of the iterations).
+    fn = _residual(*_values((line, env, t)))
     k = line.line_type.axial.nominal_ea() / line.segment_length
     scale = _force_scale(line, env, t)
 
@@ -372,7 +403,7 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     res_start = jnp.max(jnp.abs(fn(r_start, None)))
     res_polish = jnp.max(jnp.abs(fn(sol.value, None)))
     polished = jnp.all(jnp.isfinite(sol.value)) & (res_polish <= jnp.maximum(res_start, tol(r_start)))
-    r_free = jnp.where(polished, sol.value, r_start)
+    r_free = _implicit(jnp.where(polished, sol.value, r_start), line, env, t)
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element

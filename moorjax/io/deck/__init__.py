@@ -21,10 +21,10 @@ bodies (``Body1``, ...).
 ``BODIES`` rows of every kind (``fixed``, ``coupled``, ``free``,
 ``coupledpinned``) are read into :class:`DeckBody` records;
 :func:`moorjax.io.build_scene` builds fixed and coupled ones and refuses the
-others with the reason.  Currents (``Currents`` 1 and 2) and waves
+others with the reason.  Currents (``Currents`` 1, 2 and 5) and waves
 (``WaveKin`` 2, 3 and 7) are read from MoorDyn's side files
 (:mod:`moorjax.io.currents`, :mod:`moorjax.io.waves`). Rods,
-failures, external loads, other wave modes and 4-D current grids raise
+failures, external loads and other wave modes raise
 :class:`InputError` ("not supported yet"). ``SeafloorFile`` bathymetry
 grids are read (:mod:`moorjax.io.seafloor`).
 Everything is validated on reading; every error names ``file:line``, the

@@ -128,29 +128,22 @@ def options_with_defaults(deck: Deck) -> dict[str, float | str | None]:
 
 
 def _check_currents_mode(ctx: Context, lineno: int, name: str, token: str, value: float) -> None:
-    """``Currents``: 0 none, 1 steady and 2 dynamic depth profiles are read
-    (:mod:`moorjax.io.currents`); 3 and 4 are not implemented in MoorDyn
-    either; 5 (4-D grid) is not supported yet."""
-    if value in (0, 1, 2):
+    """``Currents``: 0 none, 1 steady and 2 dynamic depth profiles and 5 the 4-D
+    grid are read (:mod:`moorjax.io.currents`); 3 and 4 are not implemented in
+    MoorDyn either."""
+    if value in (0, 1, 2, 5):
         return
     if value in (3, 4):
         raise ctx.error(
             lineno,
             f"OPTIONS: {name} = {token}: current mode {int(value)} (steady/dynamic currents at nodes) is "
-            "not implemented in MoorDyn v2 either; expected 0 (none), 1 (current_profile.txt) or "
-            "2 (current_profile_dynamic.txt)",
-        )
-    if value == 5:
-        raise ctx.error(
-            lineno,
-            f"OPTIONS: {name} = {token}: 4-D current grids (current_profile_4d.txt) are not supported "
-            "yet; expected 0 (none), 1 (steady depth profile, current_profile.txt) or 2 (depth profile "
-            "in time, current_profile_dynamic.txt)",
+            "not implemented in MoorDyn v2 either; expected 0 (none), 1 (current_profile.txt), "
+            "2 (current_profile_dynamic.txt) or 5 (current_profile_4d.txt)",
         )
     raise ctx.error(
         lineno,
-        f"OPTIONS: {name} = {token} is not a MoorDyn current mode; expected 0, 1 or 2 "
-        "(3, 4: not implemented in MoorDyn; 5: 4-D grid, not supported yet)",
+        f"OPTIONS: {name} = {token} is not a MoorDyn current mode; expected 0, 1, 2 or 5 "
+        "(3, 4: not implemented in MoorDyn)",
     )
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-from ..currents import CURRENT_FILES, read_current_profile, read_dynamic_current_profile
+from ..currents import CURRENT_FILES, read_current_grid_4d, read_current_profile, read_dynamic_current_profile
 from ..waves import read_deck_waves
 from ..errors import InputWarning
 from ..seafloor import read_seafloor
@@ -79,6 +79,14 @@ def _parse(text: str, ctx: Context) -> Deck:
     seafloor = read_seafloor(options["SeafloorFile"]) if "SeafloorFile" in options else None
     _check_unsupported(ctx, sections)
 
+    if "LINE TYPES" not in sections and "LINES" not in sections:
+        found = ", ".join(sorted(sections)) or "none"
+        raise ctx.error(
+            None,
+            f"the deck has no LINE TYPES and no LINES section (sections found: {found}), so no mooring "
+            "lines; MoorDyn accepts such a deck and only moves its bodies and points, but moorjax models "
+            "lines and has nothing to solve without them; add a LINES section and the LINE TYPES it uses",
+        )
     line_types = parse_line_types(ctx, sections.get("LINE TYPES"))
     bodies = parse_bodies(ctx, sections.get("BODIES"))
     points = parse_points(ctx, sections.get("POINTS"), bodies)
@@ -100,13 +108,13 @@ def _parse(text: str, ctx: Context) -> Deck:
 
 
 def _read_current(ctx: Context, options: dict[str, float | str], option_lines: dict[str, int]):
-    """The current profile of ``Currents`` 1 or 2: the file MoorDyn-C reads from the deck's folder."""
+    """The current of ``Currents`` 1, 2 or 5: the file MoorDyn-C reads from the deck's folder."""
     mode = int(options.get("Currents", 0))
     if not mode:
         return None
     origin = f"{ctx.path}:{option_lines['Currents']}: OPTIONS: Currents = {mode}"
     side = Path(ctx.path).parent / CURRENT_FILES[mode]
-    reader = read_current_profile if mode == 1 else read_dynamic_current_profile
+    reader = {1: read_current_profile, 2: read_dynamic_current_profile, 5: read_current_grid_4d}[mode]
     return reader(side, origin)
 
 

@@ -181,7 +181,7 @@ class Deck:
             :func:`warnings.warn` as :class:`~moorjax.io.errors.InputWarning`).
         bodies: body id -> :class:`DeckBody`, in file order (empty without a
             ``BODIES`` section).
-        current: the current of a deck with ``Currents`` 1 or 2, read from
+        current: the current of a deck with ``Currents`` 1, 2 or 5, read from
             the file MoorDyn-C reads next to the deck
             (:mod:`moorjax.io.currents`); ``None`` without currents.
         seafloor: the bathymetry grid of a deck with ``SeafloorFile``

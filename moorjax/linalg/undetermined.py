@@ -1,0 +1,88 @@
+"""A lineax solver for implicit-function derivatives that may be undetermined.
+
+The derivative of a static shape r*(θ) by the implicit function theorem solves
+J·ṙ = −∂F/∂θ·θ̇ with J the Jacobian of the node forces at the root. For a slack
+line without weight (MoorDyn's ``tests/Mooring/seafloor.txt``: a line as dense
+as the water), J is singular: the shape is undetermined, and so is its
+derivative; where the polish of the root failed, J is not even finite. lineax
+then raises (``linear_solve`` checks its output and its input), which aborts the
+whole static solve although the answer itself is sound.
+
+:class:`MinimumNorm` solves by LU where J is regular and takes, where it is
+singular, the minimum-norm least-squares tangent ṙ = −J⁺·∂F/∂θ·θ̇ (the
+pseudo-inverse), and zero where even that is not finite (a failed polish: J
+itself is not finite). The minimum-norm choice moves only what the forces
+determine: an end moved on a slack weightless line drags the node next to it
+along (its segment's stiffness fixes it) and leaves the undetermined rest, so
+the line's end force keeps its true derivative, zero while the line is slack,
+which is what the system statics need (a point on slack weightless lines has
+no stiffness; see ``moorjax.statics.system._newton_step``). The choice depends
+on J only, so the pseudo-inverse is computed only for a singular J, also when
+the solve is batched over tangents.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.flatten_util
+import jax.lax as lax
+import jax.scipy.linalg
+import jax.numpy as jnp
+import lineax as lx
+
+
+class MinimumNorm(lx.AbstractLinearSolver):
+    """LU where the matrix is regular, else the minimum-norm least-squares
+    solution (pseudo-inverse), and zeros where that is not finite either.
+
+    The matrix counts as regular when its LU factors are finite and the
+    smallest pivot exceeds ``rcond`` times the largest. The choice depends on
+    the matrix only, so it stays one branch (``lax.cond``) when the solve is
+    batched over right-hand sides (``vmap`` over tangents): the pseudo-inverse
+    is computed only for a singular matrix.
+
+    Args:
+        rcond: relative pivot (and singular value) threshold.
+    """
+
+    rcond: float = 1e-12
+
+    def init(self, operator, options: dict[str, Any]):
+        a = operator.as_matrix()
+        lu, piv = jax.scipy.linalg.lu_factor(a)
+        d = jnp.abs(jnp.diag(lu))
+        regular = jnp.all(jnp.isfinite(lu)) & (jnp.min(d) > self.rcond * jnp.max(d))
+        return a, lu, piv, regular, operator.in_structure()
+
+    def compute(self, state, vector, options: dict[str, Any]):
+        a, lu, piv, regular, structure = state
+        b, _ = jax.flatten_util.ravel_pytree(vector)
+
+        def least_squares():
+            safe = jnp.where(jnp.isfinite(a), a, 0.0)
+            return jnp.linalg.pinv(safe, rtol=self.rcond) @ b
+
+        x = lax.cond(regular, lambda: jax.scipy.linalg.lu_solve((lu, piv), b), least_squares)
+        x = jnp.where(jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(a)), x, jnp.zeros_like(x))
+        _, unravel = jax.flatten_util.ravel_pytree(jax.tree.map(jnp.zeros_like, _zeros(structure)))
+        return unravel(x), lx.RESULTS.successful, {}
+
+    def transpose(self, state, options: dict[str, Any]):
+        a, _, _, _, structure = state
+        at = a.T
+        lu, piv = jax.scipy.linalg.lu_factor(at)
+        d = jnp.abs(jnp.diag(lu))
+        regular = jnp.all(jnp.isfinite(lu)) & (jnp.min(d) > self.rcond * jnp.max(d))
+        return (at, lu, piv, regular, structure), options
+
+    def conj(self, state, options: dict[str, Any]):
+        return state, options  # real matrices only
+
+    def assume_full_rank(self) -> bool:
+        return False
+
+
+def _zeros(structure):
+    return jax.tree.map(lambda s: jnp.zeros(s.shape, s.dtype), structure)
