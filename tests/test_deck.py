@@ -502,13 +502,18 @@ def test_deck_without_lines_is_refused_naming_what_is_missing():
         read_deck(DATA / "public" / "nwu.txt")
 
 
-def test_one_segment_line_is_refused_naming_why():
+def test_one_segment_line_is_built_with_two_segments_and_a_warning():
+    """A deck's NumSegs = 1 (MoorDyn: a spring-damper between the ends) is built with
+    2 segments and says so; an explicit ``--segments 1`` is refused with the reason."""
     from moorjax.io import build_scene
+    from moorjax.io.errors import InputWarning
 
     text = CASE_A.read_text()
     assert "1  main  1  2  902.2  160  -" in text
     deck = parse_deck(text.replace("1  main  1  2  902.2  160  -", "1  main  1  2  902.2  1  -"), "one.dat")
     assert deck.lines[0].n_segments == 1
-    with pytest.raises(InputError, match=r"one.dat:\d+: LINES id 1: NumSegs = 1: a line of one segment has no "
-                                         r"free node .*spring-damper.*give NumSegs >= 2"):
-        build_scene(deck)
+    with pytest.warns(InputWarning, match=r"one.dat:\d+: LINES id 1: NumSegs = 1 is built with 2 segments"):
+        scene = build_scene(deck)
+    assert scene.lines[0].n_segments == 2
+    with pytest.raises(InputError, match=r"--segments 1: a line of one segment has no free node.*N >= 2"):
+        build_scene(deck, segments=1)

@@ -199,14 +199,21 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
     lines, weights = [], []
     for dl in deck.lines:
         n = int(segments) if segments is not None else dl.n_segments
-        if n < 2:
-            where = "--segments 1" if segments is not None else (
-                f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1")
+        if n < 2 and segments is not None:
             raise InputError(
-                f"{where}: a line of one segment has no free node (MoorDyn makes it a spring-damper "
-                "between its two ends); moorjax does not support it yet: its line statics solve for the "
-                "free nodes and its dynamic state would hold none, which the static and implicit "
-                "solvers do not handle; give NumSegs >= 2 (or --segments N >= 2)")
+                "--segments 1: a line of one segment has no free node; moorjax's line statics solve "
+                "for the free nodes and its dynamic state would hold none; give --segments N >= 2")
+        if n < 2:
+            # MoorDyn makes a one-segment line a spring-damper between its ends, its mass
+            # lumped half on each; moorjax needs a free node, so the deck's line is built
+            # with two segments: the same line, its mass on three nodes (the middle one
+            # free to sag), a finer discretisation of what the deck describes
+            warnings.warn(
+                f"{deck.path}:{dl.source_line}: LINES id {dl.id}: NumSegs = 1 is built with 2 segments "
+                "(moorjax needs a free node; MoorDyn lumps the line's mass half on each end, moorjax "
+                "puts half on the middle node, which may sag); give --segments to choose",
+                InputWarning, stacklevel=2)
+            n = 2
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
         weights.append(float(lt.wet_weight(rho, g)))
