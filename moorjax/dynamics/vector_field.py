@@ -13,6 +13,12 @@ are evaluated together: they are grouped at trace time, stacked, and their
 accelerations computed by one ``vmap`` — a four-line spread with equal
 discretisation costs about one line's worth of XLA operations, not four. Lines of
 different structure fall into separate groups automatically.
+
+A line whose end forces carry its ends' inertia (the Hermite element's
+consistent mass) and that ends on a body is solved together with the bodies
+(:func:`moorjax.body.end_inertia.couple`): the bodies' accelerations and those
+lines' end accelerations are one linear solve, decided by the scene's structure
+(:func:`inertial_ends`); scenes without such lines take the plain path.
 """
 
 from __future__ import annotations
