@@ -93,10 +93,10 @@ def test_cli_element_option_on_dynamics(tmp_path):
     deck = ["--segments", "4", "--element", "hermite"]
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        assert main(["statics", str(DATA / "body_free.dat"), *deck, "--json"]) == 0
+        assert main(["statics", str(DATA / "free_body_buoy.dat"), *deck, "--json"]) == 0
     static = [row["tension_b"] for row in json.loads(buf.getvalue())]
     out = tmp_path / "o.csv"
-    assert main(["simulate", str(DATA / "body_free.dat"), "--duration", "0.1", *deck,
+    assert main(["simulate", str(DATA / "free_body_buoy.dat"), "--duration", "0.1", *deck,
                  "--out", str(out), "-q"]) == 0
     header = out.read_text().splitlines()[0].split(",")
     data = np.loadtxt(out, delimiter=",", skiprows=1, ndmin=2)
