@@ -79,17 +79,22 @@ def test_diffrax_follows_the_newmark_reference():
     assert rms < 0.002 and worst < 0.006, (rms, worst)
 
 
-def test_cli_element_option_on_dynamics(tmp_path):
-    """``--element`` is offered by simulate, ensemble and fit; a deck with a free
-    body on Hermite lines runs (statics and a short simulation: finite tensions
-    that start at the system statics' fairlead tensions)."""
-    import json
-
+def test_cli_element_option_on_dynamics():
+    """``--element`` is offered by simulate, ensemble and fit."""
     for cmd in ("simulate", "ensemble", "fit"):
         out = io.StringIO()
         with contextlib.redirect_stdout(out), pytest.raises(SystemExit):
             main([cmd, "--help"])
         assert "--element" in out.getvalue(), cmd
+
+
+@pytest.mark.slow
+def test_cli_hermite_lines_on_a_free_body(tmp_path):
+    """A deck with a free body on Hermite lines runs (statics and a short
+    simulation: finite tensions that start at the system statics' fairlead
+    tensions; 260 s here, mostly compiling)."""
+    import json
+
     deck = ["--segments", "4", "--element", "hermite"]
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
