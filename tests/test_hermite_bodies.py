@@ -134,7 +134,8 @@ def test_body_step_response_follows_the_fine_linear_element():
     """A 300 kN surge (with sway and yaw) step on the body, 10 s: Hermite lines at
     8 elements against linear ones at 40 (whose own error against 80 segments
     is about as large: measured 3 mm / 1.8 % of the tension range; Hermite-8
-    against linear-80: 1.0 cm of 0.96 m surge-sway range, 2.2 %)."""
+    against linear-80: 1.0 cm of 0.96 m surge-sway range, 2.2 %; against
+    linear-40, as asserted: 7.8 mm, angles 0.44 %, tension 1.6 %; 230 s here)."""
     from moorjax.dynamics import simulate
     from moorjax.dynamics.initial import equilibrium_state
 
