@@ -66,8 +66,8 @@ def element_option(d):
     """``--element linear|hermite`` (statics, simulate, ensemble, fit)."""
     d.add_argument("--element", choices=("linear", "hermite"), default="linear",
                    help="line discretisation: Aamo & Fossen's linear element (default), or Wu "
-                        "et al.'s Hermite-cubic element with a tension field (single lines "
-                        "between fixed or moving points; no bodies, free points, 3-D seabed)")
+                        "et al.'s Hermite-cubic element with a tension field (lines between "
+                        "fixed or moving points, free points and bodies; no 3-D seabed)")
 
 
 def dynamics_options(d):

@@ -52,11 +52,6 @@ def cmd_statics(args) -> int:
     import jax
 
     _, scene, _ = load(args)
-    if scene.bodies and args.element == "hermite":
-        from .io.errors import InputError
-
-        raise InputError("--element hermite: decks with free points or bodies (system statics) "
-                         "are not supported by the Hermite element yet; use --element linear")
     if scene.bodies:
         # free points and bodies move to their equilibrium with the lines
         from .statics.system import solve_system_statics

@@ -77,9 +77,6 @@ def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
         ok = jnp.stack([st.converged for st in sts])
         return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok))
     check_geometry(scene, t0)
-    from .vector_field import check_body_lines
-
-    check_body_lines(scene)
     return _body_equilibrium(scene, jnp.asarray(t0, dtype=float), bool(loads), float(tol),
                              int(max_iterations))
 

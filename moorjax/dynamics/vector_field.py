@@ -13,6 +13,12 @@ are evaluated together: they are grouped at trace time, stacked, and their
 accelerations computed by one ``vmap`` — a four-line spread with equal
 discretisation costs about one line's worth of XLA operations, not four. Lines of
 different structure fall into separate groups automatically.
+
+A line whose end forces carry its ends' inertia (the Hermite element's
+consistent mass) and that ends on a body is solved together with the bodies
+(:func:`moorjax.body.end_inertia.couple`): the bodies' accelerations and those
+lines' end accelerations are one linear solve, decided by the scene's structure
+(:func:`inertial_ends`); scenes without such lines take the plain path.
 """
 
 from __future__ import annotations
@@ -89,11 +95,13 @@ def line_groups(lines) -> list[list[int]]:
 
 def vector_field(t, y, scene):
     """dy/dt: (velocity, acceleration) of every line's free nodes, then each body's rate."""
+    if inertial_ends(scene):
+        line_rates, _, body_rates = _coupled(t, y, scene)
+        return line_rates + body_rates
     y_lines, lines, poses, vels = _body_kinematics(y, scene)
     out = _line_rates(t, y_lines, lines, scene.env)
     if not scene.bodies:
         return out
-    check_body_lines(scene)
     from ..body.coupling import mooring_wrenches
 
     ends = [_end_forces(line, q, scene.env, t) for line, q in zip(lines, y_lines)]
@@ -103,17 +111,26 @@ def vector_field(t, y, scene):
     return out + rates
 
 
-def check_body_lines(scene):
-    """Trace-time refusal: Hermite lines are not coupled to bodies (their end
-    force carries the end node's consistent inertia, which a body would have to
-    take into its own mass matrix)."""
-    from ..element.hermite import HermiteElement
+def inertial_ends(scene) -> bool:
+    """Whether some line on a body carries its end inertia (a consistent-mass
+    element, see :mod:`moorjax.body.end_inertia`): then the bodies' and those
+    lines' accelerations are solved together (structure, decided at trace time)."""
+    from ..body.coupling import body_ends
 
-    bad = [ln.label for ln in scene.lines if isinstance(ln.element, HermiteElement)]
-    if bad:
-        raise ValueError(f"line(s) {', '.join(bad)}: the Hermite element is not coupled to "
-                         "bodies or free points yet; use the linear element (--element linear) "
-                         "for scenes with bodies")
+    return any(line.element.carries_end_inertia and body_ends(line) for line in scene.lines)
+
+
+def _coupled(t, y, scene):
+    """(line rates, end forces per line (2, 3) [N], body rates) with the lines' end inertia."""
+    from ..body.end_inertia import couple
+
+    y_lines, lines, _, _ = _body_kinematics(y, scene)
+    responses = _grouped(_line_response, t, y_lines, lines, scene.env)
+    return couple(t, scene.lines, scene.bodies, y[len(scene.lines):], responses, scene.env)
+
+
+def _line_response(line, q, env, t):
+    return line.element.state_end_response(line, env, t, q)
 
 
 def _end_forces(line, q, env, t):
@@ -121,18 +138,23 @@ def _end_forces(line, q, env, t):
 
 
 def _line_rates(t, y, lines, env):
+    return _grouped(_line_rate, t, y, lines, env)
+
+
+def _grouped(fn, t, y, lines, env):
+    """``fn(line, q, env, t)`` for every line, one ``vmap`` per group of equal structure."""
     out = [None] * len(lines)
     for idx in line_groups(lines):
         if len(idx) == 1:
             i = idx[0]
-            out[i] = _line_rate(lines[i], y[i], env, t)
+            out[i] = fn(lines[i], y[i], env, t)
             continue
         members = [dataclasses.replace(lines[i], label="") for i in idx]
         stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *members)
         q = jnp.stack([y[i] for i in idx])
-        rates = jax.vmap(_line_rate, in_axes=(0, 0, None, None))(stacked, q, env, t)
+        res = jax.vmap(fn, in_axes=(0, 0, None, None))(stacked, q, env, t)
         for k, i in enumerate(idx):
-            out[i] = rates[k]
+            out[i] = jax.tree_util.tree_map(lambda x, k=k: x[k], res)
     return tuple(out)
 
 
@@ -147,8 +169,13 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
     """
     fa, fb, pos, ten, vel = [], [], [], [], []
     y_lines, lines, poses, vels = _body_kinematics(y, scene)
-    for line, q in zip(lines, y_lines):
-        a, b = line.element.state_end_forces(line, scene.env, t, q)
+    # lines with end inertia: their end forces with the bodies' accelerations
+    coupled = _coupled(t, y, scene)[1] if inertial_ends(scene) else None
+    for i, (line, q) in enumerate(zip(lines, y_lines)):
+        if coupled is None:
+            a, b = line.element.state_end_forces(line, scene.env, t, q)
+        else:
+            a, b = coupled[i][0], coupled[i][1]
         fa.append(a)
         fb.append(b)
         if with_nodes:

@@ -66,6 +66,28 @@ class AbstractElement(eqx.Module):
         r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
         return self.end_forces(line, env, r, v, t)
 
+    @property
+    def carries_end_inertia(self) -> bool:
+        """Whether the end forces hold the end nodes' inertia (a consistent mass
+        couples the ends' accelerations to the line's): then a body or point the
+        line ends on must not add that inertia to its own (see
+        :meth:`state_end_response`). Node elements: ``False`` (their end nodes'
+        mass is the body's to carry)."""
+        return False
+
+    def state_end_response(self, line, env, t, q):
+        """The packed rate and end forces, and their derivatives with respect to
+        the ends' accelerations beyond their paths' (what a body the line ends on
+        adds).
+
+        Returns ``(rate (rows, 6), forces (2, 3) [N], rate_gain (rows, 6, 6),
+        force_gain (2, 3, 6) [kg])`` with the gains per (a_A, a_B) (6,) [m/s²];
+        the gains are ``None`` (absent structure) where neither depends on the
+        ends' accelerations, as for node elements.
+        """
+        fa, fb = self.state_end_forces(line, env, t, q)
+        return self.state_rate(line, env, t, q), jnp.stack([fa, fb]), None, None
+
     def state_outputs(self, line, env, t, q):
         """Node positions (n+1, 3) [m], velocities (n+1, 3) [m/s] and segment
         tensions (n,) [N] from the packed state."""

@@ -325,6 +325,16 @@ class HermiteElement(AbstractElement):
 
         return end_forces(line, env, t, q)
 
+    @property
+    def carries_end_inertia(self) -> bool:
+        return True
+
+    def state_end_response(self, line, env, t, q):
+        from .hermite_motion import end_response
+
+        _check_supported(line, env)
+        return end_response(line, env, t, q)
+
     def state_outputs(self, line, env, t, q):
         from .hermite_motion import outputs
 

@@ -179,9 +179,22 @@ def _nodes(line, t, q):
     return u, ud
 
 
+def _partition(n):
+    """Flat indices of the free unknowns (all but the end positions) and of the
+    prescribed ones (end A's position, then end B's) in the (2n+2)·3 vector."""
+    free = np.ones(2 * n + 2, bool)
+    free[[0, 2 * n]] = False
+    fi = np.repeat(np.flatnonzero(free), 3) * 3 + np.tile(np.arange(3), 2 * n)
+    pi = np.concatenate([np.arange(3), 6 * n + np.arange(3)])
+    return fi, pi
+
+
 def dynamics(line, env, t, q):
     """Accelerations (2n+2, 3) of all unknowns (interleaved; the ends' are their
-    paths'), the generalised forces (2n+2, 3), the mass matrix and the field."""
+    paths'), the generalised forces (2n+2, 3), the mass matrix, the field, and
+    S = M_ff⁻¹M_fp (free unknowns × 6): how the free accelerations fall with the
+    ends' (end A's, end B's) accelerations beyond their paths' (one factorisation
+    serves both)."""
     n, h = line.n_segments, line.segment_length
     u, ud = _nodes(line, t, q)
     dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
@@ -192,19 +205,19 @@ def dynamics(line, env, t, q):
     m = mass_matrix(line, env, dofs)
     size = 3 * (2 * n + 2)
     m2 = m.reshape(size, size)
-    free = np.ones(2 * n + 2, bool)
-    free[[0, 2 * n]] = False
-    fi = np.repeat(np.flatnonzero(free), 3) * 3 + np.tile(np.arange(3), 2 * n)
-    pi = np.concatenate([np.arange(3), 6 * n + np.arange(3)])
+    fi, pi = _partition(n)
     a_p = jnp.concatenate([line.end_a.acceleration(t), line.end_b.acceleration(t)])
-    rhs = f.reshape(-1)[fi] - m2[np.ix_(fi, pi)] @ a_p
+    m_fp = m2[np.ix_(fi, pi)]
+    rhs = f.reshape(-1)[fi] - m_fp @ a_p
+    # one solve for the accelerations and S = M_ff⁻¹·M_fp (how the free unknowns
+    # follow the ends' accelerations); a clamped slope accelerates along its clamp only
+    cols = jnp.concatenate([rhs[:, None], m_fp], axis=1)
     clamps = clamped_slopes(line, t)
-    if clamps:
-        a_f = _clamped_solve(m2[np.ix_(fi, fi)], rhs, fi, clamps)
-    else:
-        a_f = jnp.linalg.solve(m2[np.ix_(fi, fi)], rhs)
+    sol = (_clamped_solve(m2[np.ix_(fi, fi)], cols, fi, clamps) if clamps
+           else jnp.linalg.solve(m2[np.ix_(fi, fi)], cols))
+    a_f, s = sol[:, 0], sol[:, 1:]
     a = jnp.zeros(size).at[fi].set(a_f).at[pi].set(a_p).reshape(2 * n + 2, 3)
-    return a, f, m2, dofs, tension
+    return a, f, m2, dofs, tension, s
 
 
 def _clamped_solve(m_ff, rhs, fi, clamps):
@@ -226,23 +239,54 @@ def _clamped_solve(m_ff, rhs, fi, clamps):
 
 
 def state_rate(line, env, t, q):
-    n = line.n_segments
     a, *_ = dynamics(line, env, t, q)
-    s = unpack_hermite(line, q)
-    acc_r = a[2:2 * n:2]  # free nodes 1..n−1
-    acc_d = a[1::2]
-    return jnp.concatenate([jnp.concatenate([s.v, acc_r], axis=-1),
-                            jnp.concatenate([s.dv, acc_d], axis=-1)], axis=0)
+    return _rate_of(line, q, a)
 
 
 def end_forces(line, env, t, q):
     """Forces (3,), (3,) [N] on the end points: the generalised force on each end
     node minus its consistent inertia (→ the end tension as elements shrink)."""
     n = line.n_segments
-    a, f, m2, _, _ = dynamics(line, env, t, q)
+    a, f, m2, *_ = dynamics(line, env, t, q)
     net = f.reshape(-1) - m2 @ a.reshape(-1)
     net = net.reshape(2 * n + 2, 3)
     return net[0], net[2 * n]
+
+
+def _rate_of(line, q, a):
+    """dq/dt (2n, 6) from the accelerations a (2n+2, 3) of all unknowns."""
+    n = line.n_segments
+    s = unpack_hermite(line, q)
+    return jnp.concatenate([jnp.concatenate([s.v, a[2:2 * n:2]], axis=-1),
+                            jnp.concatenate([s.dv, a[1::2]], axis=-1)], axis=0)
+
+
+def end_response(line, env, t, q):
+    """The rate and end forces, and how they change with the ends' accelerations.
+
+    With its ends' accelerations a_e = (a_A, a_B) (6,) [m/s²] added to their
+    paths' (a body's fairlead accelerates with the body), the free unknowns
+    accelerate by −S·a_e and the end forces change by −M_e·a_e, M_e = M_pp −
+    M_pf·S the line's end inertia as the ends see it (Schur complement of the
+    consistent mass; symmetric positive definite) [kg].
+
+    Returns:
+        rate: dq/dt (2n, 6) at the paths' end accelerations.
+        forces: (2, 3) the forces on end A and end B [N] (as :func:`end_forces`).
+        rate_gain: (2n, 6, 6) ∂(dq/dt)/∂a_e [s⁻¹·…: m/s² per m/s²].
+        force_gain: (2, 3, 6) ∂forces/∂a_e = −M_e [kg].
+    """
+    n = line.n_segments
+    a, f, m2, _, _, s = dynamics(line, env, t, q)
+    fi, pi = _partition(n)
+    net = (f.reshape(-1) - m2 @ a.reshape(-1)).reshape(2 * n + 2, 3)
+    forces = jnp.stack([net[0], net[2 * n]])
+    da = jnp.zeros((3 * (2 * n + 2), 6)).at[fi].set(-s).at[pi].set(jnp.eye(6))
+    m_e = m2[np.ix_(pi, pi)] - m2[np.ix_(pi, fi)] @ s
+    da = da.reshape(2 * n + 2, 3, 6)
+    gain = jnp.concatenate([da[2:2 * n:2], da[1::2]], axis=0)  # the rate's acceleration rows
+    rate_gain = jnp.concatenate([jnp.zeros_like(gain), gain], axis=1)
+    return _rate_of(line, q, a), forces, rate_gain, -m_e.reshape(2, 3, 6)
 
 
 def outputs(line, env, t, q):

@@ -245,10 +245,13 @@ def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) 
     end nodes of its lines (half an element's mass plus its added mass
     ρA·(l/2)·Ca). The lines' end forces carry the end nodes' weight and drag,
     so those end-node inertias go into ``added_mass`` (inertia only, no
-    weight): ΣμL/2 + ρA(l/2)·Ca_n, the normal Ca taken for every direction.
+    weight): ΣμL/2 + ρA(l/2)·Ca_n, the normal Ca taken for every direction —
+    except for lines whose element carries its end inertia itself (Hermite).
     """
     added = p.ca * rho * p.volume
     for line, dl in zip(lines, deck.lines):
+        if line.element.carries_end_inertia:  # the line's end forces hold it (Hermite)
+            continue
         for end in ("a", "b"):
             if getattr(dl, f"point_{end}") == p.id:
                 lt = line.line_type
@@ -272,6 +275,8 @@ def _end_node_inertia(deck: Deck, point_id: int, lines, rho: float) -> np.ndarra
     line's current end tangent)."""
     out = np.zeros((3, 3))
     for line, dl in zip(lines, deck.lines):
+        if line.element.carries_end_inertia:  # the line's end forces hold it (Hermite)
+            continue
         for end, other in (("a", dl.point_b), ("b", dl.point_a)):
             if getattr(dl, f"point_{end}") != point_id:
                 continue

@@ -21,7 +21,7 @@ import optimistix as optx
 from .._numerics import safe_norm
 from ..element.hermite import (WQ, HermiteDofs, clamped_slopes, element_fields, extensibility,
                                generalized_forces, static_residual)
-from ..element.hermite_motion import static_state
+from ..element.hermite_motion import HermiteState, static_state
 from ..model.line import Line
 
 
@@ -75,6 +75,43 @@ def _assemble(line, ra, rb, y):
     return HermiteDofs(r=jnp.concatenate([ra[None], r_free, rb[None]]), dr=dr, lam=lam)
 
 
+def _start(line, env, t, init, ra, rb) -> HermiteDofs:
+    """A start from ``init``: :class:`HermiteDofs` as given; from a
+    :class:`HermiteState` (a neighbouring solution's state, e.g. a system's
+    previous Newton iterate) the one of it (its ends at ``ra``, ``rb``, the
+    field λ of its stretch) and the catenary guess whose residual is smaller: an
+    end moved by metres kinks the end element of the old shape (measured: a
+    free point's 5 m step on a taut 4-element line, started from the old state,
+    diverged or reached a folded equilibrium)."""
+    if not isinstance(init, HermiteState):
+        return init
+    mine = _from_state(line, init, ra, rb)
+    guess = hermite_guess(line, env, t)
+    k = line.line_type.axial.nominal_ea() / line.segment_length
+
+    def size(dofs):
+        force, moment, constraint = static_residual(line, env, dofs, t)
+        return jnp.maximum(jnp.max(jnp.abs(force[1:-1])) / k,
+                           jnp.maximum(jnp.max(jnp.abs(moment)) / (k * line.segment_length),
+                                       jnp.max(jnp.abs(constraint))))
+
+    better = size(mine) < size(guess)  # a NaN residual picks the guess
+    return jax.tree_util.tree_map(lambda a, b: jnp.where(better, a, b), mine, guess)
+
+
+def _from_state(line, init, ra, rb) -> HermiteDofs:
+    h = line.segment_length
+    r = jnp.concatenate([ra[None], init.r, rb[None]])
+    dr = init.d / h
+    mid = 1.5 * (r[1:] - r[:-1]) / h - 0.25 * (dr[:-1] + dr[1:])  # r'(½) of the cubic
+    pts = jnp.zeros((2 * line.n_segments + 1, 3)).at[0::2].set(dr).at[1::2].set(mid)
+    strain = safe_norm(pts) - 1.0
+    axial = line.line_type.axial
+    lam = jnp.where(strain >= 0.0, axial.tension(strain),
+                    line.element.slack_ratio * axial.nominal_ea() * strain)
+    return HermiteDofs(r=r, dr=dr, lam=lam)
+
+
 def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None, *,
                         rtol=1e-10, atol=1e-8, max_steps=500):
     """The static unknowns (:class:`HermiteDofs`) and Newton's step count."""
@@ -82,7 +119,7 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
     h = line.segment_length
     k = lt.axial.nominal_ea() / h
     ra, rb = line.end_a.position(t), line.end_b.position(t)
-    y0 = hermite_guess(line, env, t) if init is None else init
+    y0 = hermite_guess(line, env, t) if init is None else _start(line, env, t, init, ra, rb)
     y0 = (y0.r[1:-1], y0.dr, y0.lam)
 
     def fn(y, args):
