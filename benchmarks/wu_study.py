@@ -17,15 +17,17 @@ its source is in ``wu_box.ASSUMPTIONS``; "Lnnn" below is a line of the paper's t
 4. cable-length sweep (Fig. 4, L252–254): polyester, anchors fixed where the 110 m
    lines have 20 kN, mean and max force per line and grounded length;
 5. uniformity (Fig. 14, L302–313): ``--cases`` environmental cases drawn within
-   Table 1's maxima (heading, Hs, Tz, wind, current, wave seed) run as one vmapped
-   ensemble per material from the loaded equilibrium; records of ``--case-duration``
+   Table 1's maxima (heading, Hs, Tz, wind, current, wave seed) run per material
+   from the loaded equilibrium, in vmapped chunks of ``--chunk`` cases (each chunk
+   kept in ``OUT/uniformity_cases`` so that a rerun resumes); records of ``--case-duration``
    after a ``--case-transient``; per case the standard deviation across the four
    lines of the peak and of the mean force, averaged over the cases. Full mode
    makes each record three undamped surge periods of that material, the longer of
    those at the base current and at half of it (the lowest drawn), from the AD
    stiffness at the loaded equilibrium;
-6. convergence of the headline ratios: segments per line and tolerances (the
-   paper's Hermite element does not exist in moorjax yet);
+6. convergence of the headline ratios: segments per line and tolerances, with
+   linear elements (the paper's Hermite element is checked on the same runs by
+   ``benchmarks/wu_hermite_check.py``);
 7. ``table.md`` and ``summary.json`` (every number and run time), ``--json PATH``
    (the claims in percent and every figure the table shows) and figures.
 
@@ -346,7 +348,7 @@ def convergence(radii, args, base=None):
                                                  start=args.starts[0], duration=args.conv_duration,
                                                  **s)
                 rec[mat] = _dyn_record(res, st, wall, ok, 0.0)
-        rows.append(dict(**s, element="linear (no Hermite element in moorjax yet)",
+        rows.append(dict(**s, element="linear (Hermite: benchmarks/wu_hermite_check.py)",
                          cable3_max_N={m: rec[m]["max_tension_N"][C3] for m in MATERIALS},
                          wall_s={m: rec[m]["wall_s"] for m in MATERIALS},
                          steps={m: rec[m]["steps"] for m in MATERIALS}, **_ratios(rec)))
