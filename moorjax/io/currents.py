@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .table import row_numbers
+from .table import moordyn_file_lines, number_rows, row_numbers
 
 __all__ = ["DeckCurrent", "read_current_profile", "read_dynamic_current_profile", "read_current_grid_4d",
            "CURRENT_FILES"]
@@ -90,10 +90,7 @@ def _check_increasing(path, linenos, values, name, unit):
 
 
 def _read_lines(path: Path, origin: str) -> list[str]:
-    if not path.is_file():
-        raise InputError(f"{origin}: the current file {str(path)!r} does not exist (MoorDyn reads it "
-                         "from the deck's folder under this fixed name)")
-    return path.read_text(encoding="utf-8", errors="replace").splitlines()
+    return moordyn_file_lines(path, origin, "current")
 
 
 def read_current_profile(path, origin: str = "") -> DeckCurrent:
@@ -106,10 +103,7 @@ def read_current_profile(path, origin: str = "") -> DeckCurrent:
     path = Path(path)
     lines = _read_lines(path, origin or str(path))
     z, u, where = [], [], []
-    for lineno, raw in enumerate(lines[3:], start=4):
-        if not raw.strip():
-            continue
-        vals = row_numbers(str(path), lineno, raw, "steady current row 'z ux [uy [uz]]'")
+    for lineno, raw, vals in number_rows(str(path), lines, 4, "steady current row 'z ux [uy [uz]]'"):
         if len(vals) < 2:
             raise InputError(f"{path}:{lineno}: steady current row {raw.strip()!r} has {len(vals)} "
                              "number(s); expected 'z [m] ux [m/s] [uy [m/s] [uz [m/s]]]'")
@@ -136,10 +130,7 @@ def read_dynamic_current_profile(path, origin: str = "") -> DeckCurrent:
     _check_increasing(str(path), [5] * len(z), z, "z", "m")
     k = len(z)
     ts, us, where = [], [], []
-    for lineno, raw in enumerate(lines[6:], start=7):
-        if not raw.strip():
-            continue
-        vals = row_numbers(str(path), lineno, raw, "dynamic current row")
+    for lineno, _, vals in number_rows(str(path), lines, 7, "dynamic current row"):
         if len(vals) not in (1 + k, 1 + 2 * k, 1 + 3 * k):
             raise InputError(
                 f"{path}:{lineno}: dynamic current row has {len(vals)} numbers; with {k} depths expected "
@@ -178,10 +169,7 @@ def read_current_grid_4d(path, origin: str = "") -> DeckCurrent:
         axes.append(np.asarray(vals, float))
     u = np.zeros(tuple(sizes) + (3,))
     seen = np.zeros(tuple(sizes), dtype=int)
-    for lineno, raw in enumerate(lines[5:], start=6):
-        if not raw.strip():
-            continue
-        vals = row_numbers(str(path), lineno, raw, "4-D current row 'x y z t ux uy uz'")
+    for lineno, _, vals in number_rows(str(path), lines, 6, "4-D current row 'x y z t ux uy uz'"):
         if len(vals) != 7:
             raise InputError(f"{path}:{lineno}: 4-D current row has {len(vals)} numbers; expected 7: "
                              "'x [m] y [m] z [m] t [s] ux [m/s] uy [m/s] uz [m/s]'")

@@ -119,6 +119,23 @@ def row_numbers(path, lineno: int, raw: str, what: str) -> list[float]:
     return out
 
 
+def moordyn_file_lines(path: Path, origin: str, kind: str) -> list[str]:
+    """The lines of a MoorDyn input file that a deck names by its fixed name
+    (``kind``: "current", "wave"); ``origin`` is where the deck asked for it."""
+    if not path.is_file():
+        raise InputError(f"{origin}: the {kind} file {str(path)!r} does not exist (MoorDyn reads it "
+                         "from the deck's folder under this fixed name)")
+    return path.read_text(encoding="utf-8", errors="replace").splitlines()
+
+
+def number_rows(path, lines: list[str], first: int, what: str):
+    """``(line number, raw row, its numbers)`` for each non-blank line of ``lines``
+    from line ``first`` (1-based) on, parsed by :func:`row_numbers`."""
+    for lineno, raw in enumerate(lines[first - 1:], start=first):
+        if raw.strip():
+            yield lineno, raw, row_numbers(path, lineno, raw, what)
+
+
 def read_table(path, expected: str = "t,...") -> Table:
     """Read the header and rows of a time table.
 

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .table import row_numbers
+from .table import moordyn_file_lines, number_rows, row_numbers
 
 __all__ = ["DeckWaves", "WAVE_FILES", "read_deck_waves", "read_wave_frequencies", "read_wave_elevation",
            "read_water_grid"]
@@ -79,10 +79,7 @@ class DeckWaves:
 
 
 def _lines(path: Path, origin: str) -> list[str]:
-    if not path.is_file():
-        raise InputError(f"{origin}: the wave file {str(path)!r} does not exist (MoorDyn reads it from the "
-                         "deck's folder under this fixed name)")
-    return path.read_text(encoding="utf-8", errors="replace").splitlines()
+    return moordyn_file_lines(path, origin, "wave")
 
 
 def read_wave_frequencies(path, origin: str = ""):
@@ -91,10 +88,7 @@ def read_wave_frequencies(path, origin: str = ""):
     path = Path(path)
     what = "wave frequency row 'omega [rad/s] Re(A) [m] Im(A) [m] [beta [rad]]'"
     om, amp, beta = [], [], []
-    for lineno, raw in enumerate(_lines(path, origin or str(path)), start=1):
-        if not raw.strip():
-            continue
-        vals = row_numbers(path, lineno, raw, what)
+    for lineno, _, vals in number_rows(path, _lines(path, origin or str(path)), 1, what):
         if len(vals) not in (3, 4):
             raise InputError(f"{path}:{lineno}: {len(vals)} numbers; expected 3 or 4 in a {what}")
         b = vals[3] if len(vals) == 4 else 0.0
@@ -118,10 +112,8 @@ def read_wave_elevation(path, origin: str = ""):
     """Rows ``t [s]  η [m]`` of a ``wave_elevation.txt``: (t (n,), eta (n,))."""
     path = Path(path)
     ts, etas, where = [], [], []
-    for lineno, raw in enumerate(_lines(path, origin or str(path)), start=1):
-        if not raw.strip():
-            continue
-        vals = row_numbers(path, lineno, raw, "wave elevation row 't [s] eta [m]'")
+    for lineno, _, vals in number_rows(path, _lines(path, origin or str(path)), 1,
+                                       "wave elevation row 't [s] eta [m]'"):
         if len(vals) < 2:
             raise InputError(f"{path}:{lineno}: {len(vals)} number(s); expected 't [s] eta [m]'")
         if ts and not vals[0] > ts[-1]:
