@@ -291,7 +291,6 @@ def solve_line_statics(
             ``converged``).
     """
     check_geometry(line, env, t)
-    from ..element.hermite import HermiteElement
     from .exact import catenary_eligible
 
     if method not in METHODS:
@@ -302,12 +301,8 @@ def solve_line_statics(
             f"line {line.label}: method='catenary' needs a linear element with Hooke's law "
             "(LinearEA), no current and a flat seabed; use method='fem' or 'auto'")
     t = jnp.asarray(t, dtype=float)
-    if isinstance(line.element, HermiteElement):  # unknowns with slopes and a tension field
-        from .hermite import hermite_statics_core as core
-    else:
-        core = _solve_core
     if method == "fem" or not eligible:
-        out = core(line, env, t, init, rtol, atol, max_steps)
+        out = element_core(line)(line, env, t, init, rtol, atol, max_steps)
     else:
         out = _exact_core(line, env, t, init, rtol, atol, max_steps, method == "auto")
     if throw:
@@ -319,6 +314,20 @@ def solve_line_statics(
             "`init`, more `max_steps` or looser tolerances",
         )
     return out
+
+
+def element_core(line):
+    """The jitted finite-element static solve for the line's element:
+    ``_solve_core`` (node elements) or the Hermite element's, whose unknowns carry
+    slopes and a tension field (``statics.hermite.hermite_statics_core``); both
+    are called as ``core(line, env, t, init, rtol, atol, max_steps)``."""
+    from ..element.hermite import HermiteElement
+
+    if isinstance(line.element, HermiteElement):
+        from .hermite import hermite_statics_core
+
+        return hermite_statics_core
+    return _solve_core
 
 
 #: The choices of :func:`solve_line_statics`'s ``method``.

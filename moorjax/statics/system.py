@@ -24,11 +24,8 @@ import numpy as np
 from jaxtyping import Array
 
 from ..body.coupling import attach, mooring_wrenches
-from ..element.hermite import HermiteElement
 from .exact import catenary_eligible, catenary_solves
-from .fem import (ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, _solve_core,
-                  check_geometry)
-from .hermite import hermite_statics_core
+from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, check_geometry, element_core
 
 
 class SystemStatics(eqx.Module):
@@ -78,9 +75,7 @@ def _line_statics_at(scene, poses, t, inits=None, methods=None):
     def one(ln, init, method):
         if method == "catenary":
             return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
-        if isinstance(ln.element, HermiteElement):  # slopes and a tension field
-            return hermite_statics_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
-        return _solve_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
+        return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
 
     return tuple(one(*x) for x in zip(lines, inits, methods))
 
