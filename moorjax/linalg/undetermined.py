@@ -50,11 +50,14 @@ class MinimumNorm(lx.AbstractLinearSolver):
     rcond: float = 1e-12
 
     def init(self, operator, options: dict[str, Any]):
-        a = operator.as_matrix()
+        return self._factor(operator.as_matrix(), operator.in_structure())
+
+    def _factor(self, a, structure):
+        """(a, its LU factors and pivots, whether a counts as regular, structure)."""
         lu, piv = jax.scipy.linalg.lu_factor(a)
         d = jnp.abs(jnp.diag(lu))
         regular = jnp.all(jnp.isfinite(lu)) & (jnp.min(d) > self.rcond * jnp.max(d))
-        return a, lu, piv, regular, operator.in_structure()
+        return a, lu, piv, regular, structure
 
     def compute(self, state, vector, options: dict[str, Any]):
         a, lu, piv, regular, structure = state
@@ -66,16 +69,12 @@ class MinimumNorm(lx.AbstractLinearSolver):
 
         x = lax.cond(regular, lambda: jax.scipy.linalg.lu_solve((lu, piv), b), least_squares)
         x = jnp.where(jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(a)), x, jnp.zeros_like(x))
-        _, unravel = jax.flatten_util.ravel_pytree(jax.tree.map(jnp.zeros_like, _zeros(structure)))
+        _, unravel = jax.flatten_util.ravel_pytree(_zeros(structure))
         return unravel(x), lx.RESULTS.successful, {}
 
     def transpose(self, state, options: dict[str, Any]):
         a, _, _, _, structure = state
-        at = a.T
-        lu, piv = jax.scipy.linalg.lu_factor(at)
-        d = jnp.abs(jnp.diag(lu))
-        regular = jnp.all(jnp.isfinite(lu)) & (jnp.min(d) > self.rcond * jnp.max(d))
-        return (at, lu, piv, regular, structure), options
+        return self._factor(a.T, structure), options
 
     def conj(self, state, options: dict[str, Any]):
         return state, options  # real matrices only
