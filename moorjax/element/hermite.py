@@ -379,11 +379,7 @@ def clamped_slopes(line, t=0.0):
     clamp's direction, from end B its reverse). Only the length of such a slope
     (1 + ε) is an unknown; the two components of the generalised force across it
     are the clamp's end moment. Structure: empty for pinned ends."""
-    from ..model.ends import AbstractClampedEnd
+    from ..model.ends import clamp_directions
 
-    out = []
-    if isinstance(line.end_a, AbstractClampedEnd):
-        out.append((0, line.end_a.direction(t)))
-    if isinstance(line.end_b, AbstractClampedEnd):
-        out.append((line.n_segments, -line.end_b.direction(t)))
-    return out
+    d_a, d_b = clamp_directions(line.end_a, line.end_b, t)
+    return [(node, d) for node, d in ((0, d_a), (line.n_segments, d_b)) if d is not None]

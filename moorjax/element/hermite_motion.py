@@ -246,10 +246,15 @@ def state_rate(line, env, t, q):
 def end_forces(line, env, t, q):
     """Forces (3,), (3,) [N] on the end points: the generalised force on each end
     node minus its consistent inertia (→ the end tension as elements shrink)."""
-    n = line.n_segments
     a, f, m2, *_ = dynamics(line, env, t, q)
-    net = f.reshape(-1) - m2 @ a.reshape(-1)
-    net = net.reshape(2 * n + 2, 3)
+    return _net_end_forces(f, m2, a, line.n_segments)
+
+
+def _net_end_forces(f, m2, a, n):
+    """End A's and end B's forces (3,) [N]: the generalised forces on their
+    positions (unknowns 0 and 2n of the interleaved 2n+2) minus their consistent
+    inertia M·a."""
+    net = (f.reshape(-1) - m2 @ a.reshape(-1)).reshape(2 * n + 2, 3)
     return net[0], net[2 * n]
 
 
@@ -279,8 +284,7 @@ def end_response(line, env, t, q):
     n = line.n_segments
     a, f, m2, _, _, s = dynamics(line, env, t, q)
     fi, pi = _partition(n)
-    net = (f.reshape(-1) - m2 @ a.reshape(-1)).reshape(2 * n + 2, 3)
-    forces = jnp.stack([net[0], net[2 * n]])
+    forces = jnp.stack(_net_end_forces(f, m2, a, n))
     da = jnp.zeros((3 * (2 * n + 2), 6)).at[fi].set(-s).at[pi].set(jnp.eye(6))
     m_e = m2[np.ix_(pi, pi)] - m2[np.ix_(pi, fi)] @ s
     da = da.reshape(2 * n + 2, 3, 6)

@@ -34,6 +34,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from .._numerics import abs_times, safe_unit
+from ..model.ends import clamp_directions
 from .base import AbstractElement
 from .mass import AbstractMass, NodalMass
 
@@ -113,7 +114,8 @@ class LinearElement(AbstractElement):
         if env.seabed is not None:
             force = force + _seabed(lt, env, r, v, node_len)
         if lt.ei is not None:
-            force = force + _bending(lt.ei, line.segment_length, r, *_clamp_directions(line, t))
+            force = force + _bending(lt.ei, line.segment_length, r,
+                                    *clamp_directions(line.end_a, line.end_b, t))
         return force
 
     def accelerations(self, line, env, t, r, v):
@@ -157,16 +159,6 @@ def clamp_energy(ei, l, direction, tangent):
     cross = jnp.cross(direction, tangent)
     dot = jnp.sum(direction * tangent, axis=-1)
     return ei / l * 4.0 * jnp.sum(cross * cross, axis=-1) / (1.0 + dot) ** 2
-
-
-def _clamp_directions(line, t):
-    """The clamps' directions along the line (A to B) at its ends: ``(d_a, d_b)``,
-    ``None`` for an end that is not clamped (structure, decided at trace time)."""
-    from ..model.ends import AbstractClampedEnd
-
-    d_a = line.end_a.direction(t) if isinstance(line.end_a, AbstractClampedEnd) else None
-    d_b = -line.end_b.direction(t) if isinstance(line.end_b, AbstractClampedEnd) else None
-    return d_a, d_b
 
 
 def _bending(ei, l, r, d_a=None, d_b=None):

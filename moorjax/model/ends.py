@@ -275,3 +275,12 @@ class ClampedEnd(AbstractClampedEnd):
 
     def direction(self, t):
         return self.unit
+
+
+def clamp_directions(end_a, end_b, t=0.0):
+    """The clamps' unit directions along the line (A to B) at its two ends:
+    ``(d_a, d_b)``, from end A the clamp's direction, from end B its reverse;
+    ``None`` for an end that is not clamped (structure, decided at trace time)."""
+    d_a = end_a.direction(t) if isinstance(end_a, AbstractClampedEnd) else None
+    d_b = -end_b.direction(t) if isinstance(end_b, AbstractClampedEnd) else None
+    return d_a, d_b
