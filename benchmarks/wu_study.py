@@ -280,10 +280,15 @@ def uniformity(mat, radius, args, draws, record, transient, store=None):
         path = None if store is None else Path(store) / f"{mat}_{first:04d}.npz"
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
-        key = np.array([record, transient, args.segments, args.rtol, args.atol, len(idx)])
+        # what the chunk's numbers depend on: its drawn cases, the record, the
+        # resolution and the solver; a stored chunk is reused only when all agree
+        key = np.concatenate([[record, transient, args.segments, args.rtol, args.atol,
+                               args.components, args.dt_out],
+                              np.ravel([np.asarray(draws[name], float)[idx] for name in sorted(draws)])])
         if path is not None and path.exists():
             z = np.load(path)
-            if z["key"].shape == key.shape and np.allclose(z["key"], key):
+            if (z["key"].shape == key.shape and np.allclose(z["key"], key, rtol=1e-12, atol=0.0)
+                    and "solver" in z.files and str(z["solver"]) == args.solver):
                 peak[idx], mean[idx], ok[idx], steps[idx] = z["peak"], z["mean"], z["ok"], z["steps"]
                 t_statics, wall = t_statics + float(z["statics_s"]), wall + float(z["ensemble_s"])
                 not_conv += [int(i) for i in z["not_conv"]]
@@ -310,7 +315,7 @@ def uniformity(mat, radius, args, draws, record, transient, store=None):
         t_statics, wall = t_statics + ts, wall + w
         not_conv += nc.tolist()
         if path is not None:
-            np.savez(path, key=key, peak=peak[idx], mean=mean[idx], ok=ok[idx], steps=steps[idx],
+            np.savez(path, key=key, solver=args.solver, peak=peak[idx], mean=mean[idx], ok=ok[idx], steps=steps[idx],
                      statics_s=ts, ensemble_s=w, not_conv=nc)
         print(f"  {mat} cases {idx[0]}–{idx[-1]}: {int(ok[idx].sum())}/{len(idx)} ok, "
               f"{w:.0f} s", flush=True)
