@@ -82,11 +82,11 @@ def cmd_statics(args) -> int:
                 f"{int(st.iterations)} Newton iterations)"
             )
         z_top = float(np.max(np.asarray(st.positions)[:, 2]))
-        if z_top > 0.0:
+        if z_top > 0.0 and not line.element.wets_partially:
             warnings.warn(
                 f"line {line.label}: nodes above the free surface at equilibrium (highest "
-                f"z = {z_top:.4g} m); moorjax has no free-surface model, so buoyancy acts "
-                "there as if submerged")
+                f"z = {z_top:.4g} m); the {type(line.element).__name__} has no free-surface "
+                "model, so buoyancy acts there as if submerged")
         rows.append(
             dict(
                 id=int(line.label) if line.label.isdigit() else line.label,
@@ -195,7 +195,7 @@ def cmd_simulate(args) -> int:
         deck=args.deck, deck_text=deck_text(args.deck), motion=motion_path(args) or "none",
         settings=settings, history=command_line(args),
     ))
-    for msg in check_run(ds):
+    for msg in check_run(ds, dry_ok=[ln.element.wets_partially for ln in scene.lines]):
         warnings.warn(msg)
     write_results(ds, args.out, nodes=not args.no_nodes)
     prog.say(f"wrote {args.out}")

@@ -255,15 +255,21 @@ def test_motion_starting_late_is_refused(tmp_path):
     assert "late.csv" in err and "covers t = 0.5" in err and "needs" in err
 
 
-def test_fairlead_above_the_surface_warns(tmp_path):
-    """A fairlead lifted from z = -5 m to +1 m: warned once, with time and line."""
+def test_fairlead_above_the_surface(tmp_path):
+    """A fairlead lifted from z = -5 m to +1 m: the linear element wets only what is
+    under water, so nothing is warned; for an element without a free-surface model
+    (``dry_ok`` False) check_run names the line and the first time."""
+    from moorjax.io.plausibility import check_run
+
     m = tmp_path / "lift.csv"
     write_motion(m, np.arange(2401) * 0.25, lambda t: 0 * t, lambda t: -5.0 + 6.0 * np.minimum(t, 1.0))
     rc, _, err = run("simulate", DECK, *BASE, "--motion", m, "--out", tmp_path / "o.nc")
     assert rc == 0, err
-    lines = [ln for ln in err.splitlines() if "free surface" in ln]
-    assert len(lines) == 1 and lines[0].startswith("moorjax simulate: warning: line 1:"), err
-    assert "from t = 0.9 s" in lines[0]
+    assert "free surface" not in err, err
+    ds = xr.open_dataset(tmp_path / "o.nc")
+    assert check_run(ds, dry_ok=[True]) == []
+    (msg,) = check_run(ds)
+    assert msg.startswith("line 1:") and "free surface from t = 0.9 s" in msg, msg
 
 
 def test_strain_beyond_the_law_is_named():
@@ -394,14 +400,19 @@ def test_progress_only_on_a_terminal():
     assert "t = 30 / 60 s simulated" in text and "50.0%" in text and text.endswith("\n")
 
 
-def test_statics_warns_of_a_fairlead_above_the_surface(tmp_path):
+def test_statics_of_a_fairlead_above_the_surface(tmp_path):
+    """Linear lines wet only what is under water (no warning); the Hermite element
+    has no free-surface model and is warned about."""
     text = Path(example("taut_polyester").deck).read_text()
     deck = tmp_path / "high.dat"
     deck.write_text(text.replace("2  Coupled 0.0 0.0 -5.0", "2  Coupled 0.0 0.0 1.0"))
     rc, out, err = run("statics", deck, "--segments", "6", "--json")
     assert rc == 0, err
+    assert "free surface" not in err, err
+    rc, out, err = run("statics", deck, "--segments", "6", "--json", "--element", "hermite")
+    assert rc == 0, err
     assert "moorjax statics: warning: line 1: nodes above the free surface" in err
-    assert "z = 1 m" in err
+    assert "z = 1 m" in err and "HermiteElement has no free-surface model" in err
 
 
 def test_stats_come_from_one_run(tmp_path, monkeypatch):

@@ -27,7 +27,7 @@ import pytest
 from moorjax.body import ConnectionPoint
 from moorjax.dynamics import simulate
 from moorjax.io import build_scene, parse_deck, read_deck
-from moorjax.io.errors import InputError
+from moorjax.io.errors import InputError, InputWarning
 from moorjax.model import BodyEnd, LineState
 from moorjax.statics import solve_system_statics
 
@@ -83,6 +83,21 @@ def test_free_point_without_inertia_is_refused():
         deck = parse_deck(text)
     with pytest.raises(InputError, match=r"POINTS id 2: a free point with Mass = 0 kg.*no inertia"):
         build_scene(deck)
+
+
+def test_free_line_end_without_mass_or_volume_is_warned_about():
+    """A massless point on one line end (MoorDyn's ``tripod.txt`` has one: the top of
+    its float) is named: its equilibrium is degenerate."""
+    text = DECK.format(word="Free", mass=0.0).replace("2.0   1.5  0.8", "0.0   0.0  0.0")
+    text = text.replace("2   rope      2        3        40        8", "2   rope      1        3        40        8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        deck = parse_deck(text)
+    with pytest.warns(InputWarning, match=r"POINTS id 2: a free point on one line end .* free line end"):
+        build_scene(deck)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputWarning)  # with a mass it is an ordinary point
+        build_scene(parse_deck(DECK.format(word="Free", mass=500.0)))
 
 
 @pytest.mark.slow

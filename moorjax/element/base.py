@@ -67,6 +67,14 @@ class AbstractElement(eqx.Module):
         return self.end_forces(line, env, r, v, t)
 
     @property
+    def wets_partially(self) -> bool:
+        """Whether the element is buoyant only where it is under the free surface
+        (MoorDyn's submerged fraction; see :mod:`moorjax.element.linear`). ``False``:
+        buoyancy, drag and added mass act above the surface as if submerged, and
+        the command line warns of such nodes."""
+        return False
+
+    @property
     def carries_end_inertia(self) -> bool:
         """Whether the end forces hold the end nodes' inertia (a consistent mass
         couples the ends' accelerations to the line's): then a body or point the

@@ -6,7 +6,14 @@ unit tangent t_j, strain e_j = ℓ_j/l − 1 (l = L/n unstretched). Forces on th
 
 - elastic and internal damping: T_j = law(e_j) + BA·ė_j along t_j (Eq. 2/7, f_r);
 - gravity and buoyancy: the wet weight w = (m − ρA)g per unstretched length,
-  w·l/2 from each adjacent element (f_hg, whose (1+e) factors cancel);
+  w·l/2 from each adjacent element (f_hg, whose (1+e) factors cancel). A line that
+  reaches the free surface (z = 0, or the wave elevation η with ``env.waves``) is
+  buoyant only where it is under water, as in MoorDyn v2 (``Line::calcSubSeg`` in
+  ``source/Line.cpp``, v2.4+): element j is wet over the fraction F_j of its length
+  that lies below the surface, linear between its nodes' heights h (1 below, 0
+  above, −h_a/(h_b − h_a) across), and node k's buoyancy is ρAg·l·(F_{k−1} + F_k)/2;
+  the drag, the water's inertia and the added mass of element j scale with F_j too.
+  Under water F ≡ 1 and nothing changes;
 - Morison drag on the velocity relative to the water (current plus wave particle
   velocity), per adjacent element half (stretched length ℓ_j/2), split on t_j into
   axial and normal parts (Eq. 7, f_dt, f_dn);
@@ -45,6 +52,18 @@ def _to_nodes(left, right):
     return jnp.concatenate([left, pad], axis=0) + jnp.concatenate([pad, right], axis=0)
 
 
+def submerged_fraction(h):
+    """Wet fraction F_j ∈ [0, 1] of each element (n,) from its nodes' heights above the
+    free surface h (n+1,) [m]: 1 below, 0 above, −h_a/(h_b − h_a) for an element that
+    crosses it (MoorDyn v2's ``calcSubSeg``), 1/2 for one lying in the surface. It is
+    continuous in the node heights (kinked where a node crosses the surface)."""
+    ha, hb = h[:-1], h[1:]
+    wet = jnp.maximum(-ha, 0.0) + jnp.maximum(-hb, 0.0)
+    span = jnp.abs(ha) + jnp.abs(hb)
+    ok = span > 0.0
+    return jnp.where(ok, wet / jnp.where(ok, span, 1.0), 0.5)
+
+
 def _node_lengths(line):
     """Unstretched length carried by each node (n+1,) [m]: l/2 at the ends, l inside."""
     n = line.n_segments
@@ -60,6 +79,10 @@ class LinearElement(AbstractElement):
     @property
     def banded_jacobian(self) -> bool:
         return self.mass.banded
+
+    @property
+    def wets_partially(self) -> bool:
+        return True
 
     def line_banded(self, line) -> bool:
         return self.mass.banded and line.line_type.ei is None
@@ -82,24 +105,37 @@ class LinearElement(AbstractElement):
 
     # -- forces ---------------------------------------------------------------
     def nodal_forces(self, line, env, r, v, t=0.0):
+        return self._forces(line, env, r, v, t)[0]
+
+    def _forces(self, line, env, r, v, t):
+        """All-node forces (n+1, 3) [N] and each element's wet fraction (n,)."""
         lt = line.line_type
         tangent, stretched = self._segments(r)
         tension = self.segment_tensions(line, r, v)
         f_seg = tension[:, None] * tangent
         force = _to_nodes(f_seg, -f_seg)
 
-        node_len = _node_lengths(line)
-        weight = lt.wet_weight(env.rho, env.g)
-        force = force.at[:, 2].add(-weight * node_len)
-
         wave_u = wave_a = None
         r_current = r
+        surface = 0.0
         if env.waves is not None:
             eta, wave_u, wave_a = env.waves.kinematics(r, t)
             r_current = r.at[:, 2].set(env.waves.current_height(r, eta))
+            surface = eta
+        frac = submerged_fraction(r[:, 2] - surface)
+        wet = stretched * frac  # the wet length of each element
+
+        node_len = _node_lengths(line)
+        weight = lt.wet_weight(env.rho, env.g)
+        # buoyancy lost above the surface: exactly zero for a line under water
+        half_dry = 0.5 * line.segment_length * (frac - 1.0)
+        dry = _to_nodes(half_dry, half_dry)
+        force = force.at[:, 2].add(-weight * node_len + env.rho * lt.area * env.g * dry)
+
+        if wave_a is not None:
             force = force + _to_nodes(
-                _fluid_inertia(lt, env, wave_a[:-1], tangent, stretched),
-                _fluid_inertia(lt, env, wave_a[1:], tangent, stretched),
+                _fluid_inertia(lt, env, wave_a[:-1], tangent, wet),
+                _fluid_inertia(lt, env, wave_a[1:], tangent, wet),
             )
 
         if lt.drag is not None:
@@ -107,8 +143,8 @@ class LinearElement(AbstractElement):
             if wave_u is not None:
                 u = u - wave_u
             force = force + _to_nodes(
-                _drag(lt, env, u[:-1], tangent, stretched),
-                _drag(lt, env, u[1:], tangent, stretched),
+                _drag(lt, env, u[:-1], tangent, wet),
+                _drag(lt, env, u[1:], tangent, wet),
             )
 
         if env.seabed is not None:
@@ -116,12 +152,13 @@ class LinearElement(AbstractElement):
         if lt.ei is not None:
             force = force + _bending(lt.ei, line.segment_length, r,
                                     *clamp_directions(line.end_a, line.end_b, t))
-        return force
+        return force, frac
 
     def accelerations(self, line, env, t, r, v):
         tangent, stretched = self._segments(r)
-        force = self.nodal_forces(line, env, r, v, t)
-        return self.mass.accelerations(line, env, t, force, tangent, stretched)
+        force, frac = self._forces(line, env, r, v, t)
+        # the added mass of each element is that of its wet length
+        return self.mass.accelerations(line, env, t, force, tangent, stretched * frac)
 
     def end_forces(self, line, env, r, v, t=0.0):
         force = self.nodal_forces(line, env, r, v, t)

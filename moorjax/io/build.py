@@ -259,6 +259,15 @@ def _free_point(deck: Deck, p: DeckPoint, lines, rho: float, g: float, current) 
                 added += float(lt.mass_per_length) * half
                 if lt.added_mass is not None:
                     added += rho * float(lt.area) * half * float(lt.added_mass.ca_normal)
+    ends = sum((dl.point_a == p.id) + (dl.point_b == p.id) for dl in deck.lines)
+    if ends == 1 and p.mass == 0 and p.volume == 0:
+        warnings.warn(
+            f"{deck.path}:{p.source_line}: POINTS id {p.id}: a free point on one line end with no "
+            "Mass or Volume is a free line end: it is in equilibrium only where the line's end "
+            "force (its tension plus the end half-element's wet weight) vanishes, which a "
+            "tension-only line reaches only hanging straight from it (a dry, heavy or a wet, "
+            "buoyant end); elsewhere system statics cannot converge (and MoorDyn's relaxation "
+            "need not settle)", InputWarning, stacklevel=3)
     if not p.mass + added > 0:
         raise InputError(
             f"{deck.path}:{p.source_line}: POINTS id {p.id}: a free point with Mass = 0 kg, no "

@@ -3,8 +3,9 @@
 :func:`check_run` looks at a simulation dataset (:mod:`moorjax.io.dataset`) and
 returns one message per line and problem, naming the first time it occurs:
 
-* nodes above the free surface z = 0 (moorjax has no free-surface model:
-  buoyancy, drag and added mass act as if the node were submerged);
+* nodes above the free surface z = 0 of a line whose element has no
+  free-surface model (the Hermite element: buoyancy, drag and added mass act as
+  if the node were submerged; the linear element wets only what is under water);
 * segment strain above :data:`moorjax.statics.fem.MAX_STRAIN` (the limit the
   static solver enforces; no axial law here is meant for such stretches).
 
@@ -23,8 +24,11 @@ def _first(ts, mask):
     return int(np.argmax(hit)) if hit.any() else None
 
 
-def check_run(ds) -> list[str]:
-    """Messages about ``ds`` (empty when nothing is out of the model's range)."""
+def check_run(ds, dry_ok=None) -> list[str]:
+    """Messages about ``ds`` (empty when nothing is out of the model's range).
+
+    ``dry_ok``: per line, whether its element models the free surface (then nodes
+    above it are in the model's range); default: none does."""
     from ..statics.fem import MAX_STRAIN
 
     ts = ds["time"].values
@@ -43,12 +47,12 @@ def check_run(ds) -> list[str]:
             z = r[..., 2]
             strain = np.linalg.norm(r[:, 1] - r[:, 0], axis=-1)[:, None] / length - 1.0
             what = "strain of the chord between the ends"
-        i = _first(ts, z > 0.0)
+        i = None if dry_ok is not None and dry_ok[j] else _first(ts, z > 0.0)
         if i is not None:
             out.append(
                 f"line {lid}: nodes above the free surface from t = {ts[i]:.6g} s (highest "
-                f"z = {np.nanmax(z):.4g} m); moorjax has no free-surface model, so buoyancy, "
-                "drag and added mass act there as if submerged")
+                f"z = {np.nanmax(z):.4g} m); its element has no free-surface model, so "
+                "buoyancy, drag and added mass act there as if submerged")
         i = _first(ts, strain > MAX_STRAIN)
         if i is not None:
             out.append(

@@ -88,6 +88,10 @@ def catenary_statics(line, env, t):
     if lt.ei is not None:  # a cable, unless the bending length is negligible
         bending_length = jnp.sqrt(lt.ei / jnp.maximum(sol.HF, jnp.finfo(float).tiny))
         ok = ok & (bending_length <= BENDING_LENGTH_FRACTION * length)
+    # a line above the water surface is buoyant only where it is wet (the linear
+    # element's submerged fraction): the uniform catenary then does not hold
+    dry = jnp.any(nodes[:, 2] > 1e-9 * jnp.maximum(env.depth, length))
+    ok = ok & ~(dry & (env.rho * lt.area * env.g != 0))
     if bed is not None:
         # the free catenary must not pass under the bed (else it would rest on it)
         scale = jnp.maximum(jnp.abs(bed), length)
