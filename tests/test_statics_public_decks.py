@@ -33,13 +33,16 @@ def lines_of(name, segments, length=None):
     return lines, scene.env
 
 
-def moorpy(line, env):
-    """(T_A, T_B) of MoorPy's catenary between the line's ends."""
+def moorpy(line, env, dry=False):
+    """(T_A, T_B) of MoorPy's catenary between the line's ends; ``dry``: a line in
+    air (MoorDyn's and moorjax's lines are buoyant only under the surface, MoorPy's
+    everywhere), weighing m·g."""
     ra, rb = np.asarray(line.end_a.position(0.0)), np.asarray(line.end_b.position(0.0))
     lo, hi = (ra, rb) if ra[2] <= rb[2] else (rb, ra)
     depth = float(env.depth)
     cb = 0.0 if abs(lo[2] + depth) < 1e-6 else -(lo[2] + depth)
-    w = float(line.line_type.wet_weight(env.rho, env.g))
+    lt = line.line_type
+    w = float(lt.mass_per_length * env.g if dry else lt.wet_weight(env.rho, env.g))
     fah, fav, fbh, fbv, _ = moorpy_catenary(
         float(np.hypot(*(hi - lo)[:2])), float(hi[2] - lo[2]), float(line.length),
         float(line.line_type.axial.nominal_ea()), w, CB=cb, Tol=1e-10, MaxIter=500)
@@ -53,7 +56,9 @@ def errors(name, segments, length=None):
     out = []
     for line in lines:
         st = SOLVE(line, env)
-        ta, tb = moorpy(line, env)
+        z = np.asarray(st.positions)[:, 2]
+        assert z.min() >= 0.0 or z.max() <= 0.0, "a surface-piercing line has no MoorPy oracle"
+        ta, tb = moorpy(line, env, dry=bool(z.min() >= 0.0 and z.max() > 0.0))
         out.append((bool(st.converged), int(st.iterations), float(st.tension_a) / ta - 1,
                     float(st.tension_b) / tb - 1, ta, tb))
     return out
