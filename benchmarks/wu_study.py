@@ -357,7 +357,9 @@ def convergence(radii, args, base=None):
         rows.append(dict(**s, element="linear (Hermite: benchmarks/wu_hermite_check.py)",
                          cable3_max_N={m: rec[m]["max_tension_N"][C3] for m in MATERIALS},
                          wall_s={m: rec[m]["wall_s"] for m in MATERIALS},
-                         steps={m: rec[m]["steps"] for m in MATERIALS}, **_ratios(rec)))
+                         steps={m: rec[m]["steps"] for m in MATERIALS},
+                         # a run that failed part-way has its maximum over a partial record
+                         status={m: rec[m]["status"] for m in MATERIALS}, **_ratios(rec)))
         print(f"convergence {s}: {({k: round(v, 2) for k, v in _ratios(rec).items()})}", flush=True)
     return rows
 
