@@ -108,7 +108,8 @@ class LinearElement(AbstractElement):
         return self._forces(line, env, r, v, t)[0]
 
     def _forces(self, line, env, r, v, t):
-        """All-node forces (n+1, 3) [N] and each element's wet fraction (n,)."""
+        """All-node forces (n+1, 3) [N], the elements' unit tangents (n, 3) and their wet
+        (stretched, under the surface) lengths (n,) [m]."""
         lt = line.line_type
         tangent, stretched = self._segments(r)
         tension = self.segment_tensions(line, r, v)
@@ -152,13 +153,12 @@ class LinearElement(AbstractElement):
         if lt.ei is not None:
             force = force + _bending(lt.ei, line.segment_length, r,
                                     *clamp_directions(line.end_a, line.end_b, t))
-        return force, frac
+        return force, tangent, wet
 
     def accelerations(self, line, env, t, r, v):
-        tangent, stretched = self._segments(r)
-        force, frac = self._forces(line, env, r, v, t)
+        force, tangent, wet = self._forces(line, env, r, v, t)
         # the added mass of each element is that of its wet length
-        return self.mass.accelerations(line, env, t, force, tangent, stretched * frac)
+        return self.mass.accelerations(line, env, t, force, tangent, wet)
 
     def end_forces(self, line, env, r, v, t=0.0):
         force = self.nodal_forces(line, env, r, v, t)
