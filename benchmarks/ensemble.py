@@ -53,7 +53,16 @@ def _members(case, m, seed):
     return [set_parameter(base, "Cd", v) for v in values]
 
 
-def worker(case, m, duration):
+def _settings(case, solver=None, dt=None):
+    """simulate's keyword arguments for a case: its default solver, or ``solver``
+    (with a fixed step ``dt`` [s], e.g. an explicit method at MoorDyn's step)."""
+    kw = dict(solver=solver or SETTINGS[case]["solver"], dt_out=0.05)
+    if dt is not None:
+        kw["dt"] = dt
+    return kw
+
+
+def worker(case, m, duration, solver=None, dt=None):
     """One (case, M) measurement; prints a JSON line."""
     import jax
 
@@ -62,7 +71,7 @@ def worker(case, m, duration):
     from moorjax.ensemble import simulate_ensemble, status
     from moorjax.ensemble.run import TRACES
 
-    kw = dict(solver=SETTINGS[case]["solver"], dt_out=0.05)
+    kw = _settings(case, solver, dt)
     t0 = time.perf_counter()
     res = simulate_ensemble(_members(case, m, 0), duration, **kw)
     jax.block_until_ready(res.tension_b)
@@ -86,14 +95,14 @@ def worker(case, m, duration):
     print(json.dumps(out))
 
 
-def single_moorjax(case, duration, repeats=3):
+def single_moorjax(case, duration, repeats=3, solver=None, dt=None):
     import jax
 
     from moorjax.dynamics import simulate
     from moorjax.statics import solve_line_statics
 
     members = _members(case, repeats, 2)
-    kw = dict(solver=SETTINGS[case]["solver"], dt_out=0.05)
+    kw = _settings(case, solver, dt)
     init = [tuple(solve_line_statics(ln, s.env).state() for ln in s.lines) for s in members]
     jax.block_until_ready(simulate(members[0], duration, init=init[0], **kw).tension_b)
     t0 = time.perf_counter()
@@ -132,29 +141,34 @@ def main(argv=None):
     ap.add_argument("--reference", metavar="DIR", action=_ReferenceDir,
                     help="folder of the reference data (default $MOORJAX_REFERENCE_DIR, else "
                          "../shared/reference beside the repository); workers inherit it")
+    ap.add_argument("--solver", help="moorjax solver (default: the case's, see SETTINGS)")
+    ap.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "M"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
-        worker(a.worker[0], int(a.worker[1]), a.duration)
+        worker(a.worker[0], int(a.worker[1]), a.duration, a.solver, a.dt)
         return 0
     if a.quick:
         a.sizes, a.duration = [1, 10, 100], 5.0
     rows = []
     for case in a.cases:
-        single = single_moorjax(case, a.duration)
+        single = single_moorjax(case, a.duration, solver=a.solver, dt=a.dt)
         md = moordyn_loop(case, a.duration)
         print(f"case {case}: moorjax one-by-one {single:.2f} ms/sim-s per member; MoorDyn "
               f"{md['setting']}: {md['stepping_ms']:.2f} ms/sim-s (stepping), error "
               f"{(md['rel_err'] or float('nan')) * 100:.2f} %", flush=True)
         for m in a.sizes:
             p = subprocess.run([sys.executable, __file__, "--worker", case, str(m),
-                                "--duration", str(a.duration)], capture_output=True, text=True)
+                                "--duration", str(a.duration)]
+                               + (["--solver", a.solver] if a.solver else [])
+                               + (["--dt", str(a.dt)] if a.dt else []),
+                               capture_output=True, text=True)
             if p.returncode != 0:
                 print(p.stderr[-2000:])
                 rows.append(dict(case=case, members=m, error=p.stderr[-300:]))
                 continue
             r = json.loads(p.stdout.strip().splitlines()[-1])
-            r.update(single_ms=single, moordyn_ms=md["stepping_ms"], moordyn_err=md["rel_err"],
+            r.update(solver=a.solver or SETTINGS[case]["solver"], dt=a.dt, single_ms=single, moordyn_ms=md["stepping_ms"], moordyn_err=md["rel_err"],
                      moordyn_setting=md["setting"],
                      vs_single=r["ms_per_sim_s_per_member"] / single,
                      vs_moordyn=r["ms_per_sim_s_per_member"] / md["stepping_ms"])

@@ -48,52 +48,57 @@ from benchmarks.common import (  # noqa: E402
 )
 
 
-def plan(quick: bool):
-    """(group, case, N, solver, settings text, scene kwargs, simulate kwargs, duration)."""
+def plan(quick: bool, solver: str = "kvaerno5"):
+    """(group, case, N, solver, settings text, scene kwargs, simulate kwargs, duration).
+
+    ``solver``: the implicit method of the slack–snap, stiff, fine-mesh, large-step
+    and long runs (default kvaerno5; implicit Euler's large-step runs stay)."""
     per = {"A": 10.0, "B": 8.0}
     t_ab = {c: (per[c] if quick else 3 * per[c]) for c in per}
     runs = []
     # slack–snap
     for amp in ((2.0, 4.0) if quick else (2.0, 4.0, 6.0)):
-        runs.append(("slack-snap", "B", 20, "kvaerno5", f"amp {amp:g} m", dict(amplitude=amp), {},
+        runs.append(("slack-snap", "B", 20, solver, f"amp {amp:g} m", dict(amplitude=amp), {},
                      t_ab["B"]))
     # very stiff lines
     for case in ("A", "B"):
         for ea in ((1e10,) if quick else (1e9, 1e10)):
-            runs.append(("stiff EA", case, 20, "kvaerno5", f"EA {ea:.0e} N", dict(ea=ea), {},
+            runs.append(("stiff EA", case, 20, solver, f"EA {ea:.0e} N", dict(ea=ea), {},
                          t_ab[case]))
     # fine mesh
     for case in (("B",) if quick else ("A", "B")):
-        runs.append(("fine mesh", case, 400, "kvaerno5", "400 segments", {}, {},
+        runs.append(("fine mesh", case, 400, solver, "400 segments", {}, {},
                      1.0 if quick else 10.0))
     # large fixed steps, implicit
-    fixed = [("A", "kvaerno5", 0.05), ("B", "implicit_euler", 0.05)] if quick else [
-        (c, s, dt) for c in ("A", "B") for s in ("kvaerno5", "implicit_euler")
+    fixed = [("A", solver, 0.05), ("B", "implicit_euler", 0.05)] if quick else [
+        (c, s, dt) for c in ("A", "B") for s in (solver, "implicit_euler")
         for dt in (0.01, 0.02, 0.05)]
-    for case, solver, dt in fixed:
-        runs.append(("large dt", case, 20, solver, f"dt {1e3 * dt:g} ms", {}, dict(dt=dt), t_ab[case]))
+    for case, method, dt in fixed:
+        runs.append(("large dt", case, 20, method, f"dt {1e3 * dt:g} ms", {}, dict(dt=dt), t_ab[case]))
     # a long run
     t_long = 300.0 if quick else 10_800.0
-    runs.append(("long run", "A", 20, "kvaerno5", f"{t_long:g} s, out 1 s", {},
+    runs.append(("long run", "A", 20, solver, f"{t_long:g} s, out 1 s", {},
                  dict(dt_out=1.0, warm="still"), t_long))
     # explicit solvers beyond their stability limit (and one stable control run)
     expl = [("A", "heun", 0.02), ("A", "tsit5", 0.02), ("A", "heun", 0.004)]
     if not quick:
         expl += [("B", "heun", 0.005), ("B", "tsit5", 0.005), ("B", "heun", 5e-4)]
-    for case, solver, dt in expl:
-        runs.append(("explicit", case, 20, solver, f"dt {1e3 * dt:g} ms", {}, dict(dt=dt),
+    for case, method, dt in expl:
+        runs.append(("explicit", case, 20, method, f"dt {1e3 * dt:g} ms", {}, dict(dt=dt),
                      per[case] if quick else t_ab[case]))
     return runs
 
 
 def main(argv=None):
     p = base_parser(__doc__)
+    p.add_argument("--solver", default="kvaerno5",
+                   help="implicit method of the stress runs (default kvaerno5; e.g. ros34pw2)")
     args = p.parse_args(argv)
     print("moorjax stability stress test" + (" (--quick: shorter runs, long run 300 s "
                                                 "instead of 10 800 s)" if args.quick else ""))
     print(NOISE_NOTE)
     rows, inits = [], {}
-    for group, case, n, solver, settings, sc_kw, sim_kw, duration in plan(args.quick):
+    for group, case, n, solver, settings, sc_kw, sim_kw, duration in plan(args.quick, args.solver):
         scene = case_scene(case, n, amplitude=sc_kw.get("amplitude"))
         if "ea" in sc_kw:
             scene = with_ea(scene, sc_kw["ea"])

@@ -10,8 +10,9 @@ standard deviation, and the number of steps.
 - MoorDyn: rk2, rk4 and midpoint5 (MoorDyn's k=0.5 implicit Euler, 5
   iterations) at N = 10 … 80 and the largest stable dtM and half of it, as
   listed in the reference cost table ``moordyn_cost_error.csv``;
-- moorjax: kvaerno3 and kvaerno5 (adaptive) at N = 10, 20, 40, 80 and tolerance
-  pairs (rtol, atol [m]) = (1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)
+- moorjax: kvaerno3, kvaerno5 and ros34pw2 (adaptive) at N = 10, 20, 40, 80 and
+  tolerance pairs (rtol, atol [m]) = (1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)
+  (ros34pw2 also at (3e-6, 3e-5))
   (``atol_velocity`` = 100·atol m/s, moorjax's default); implicit_euler with
   fixed steps; heun with fixed steps at MoorDyn's RK2 stability limit for that N
   (and half of it);
@@ -60,6 +61,8 @@ from benchmarks.moordyn_runner import rel_rms_error, run_moordyn  # noqa: E402
 from moorjax.examples import example_path  # noqa: E402
 
 TOLS = [(1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)]
+#: a tighter pair for ros34pw2 (its cheapest runs are at the default and looser)
+ROS_TIGHT = (3e-6, 3e-5)
 #: error levels of the cheapest-run summary (0.5 %: only N = 80 runs get there; the
 #: references are good to about 0.3 %, so 0.1 % is not reachable with them)
 LEVELS = (0.01, 0.005, 0.001)
@@ -80,10 +83,14 @@ QUICK = {
     "moorjax": {"A": [(40, "kvaerno5", (1e-5, 1e-4), None), (40, "kvaerno3", (1e-5, 1e-4), None),
                       (20, "kvaerno3", (1e-5, 1e-4), None),
                       (20, "heun", None, 6.25e-3), (40, "heun", None, 3.125e-3),
+                      (40, "ros34pw2", ROS_TIGHT, None), (40, "ros34pw2", (1e-5, 1e-4), None),
+                      (20, "ros34pw2", ROS_TIGHT, None),
                       (20, "implicit_euler", None, 2e-3)],
                 "B": [(10, "kvaerno5", (1e-5, 1e-4), None), (10, "kvaerno3", (1e-5, 1e-4), None),
                       (20, "kvaerno3", (1e-5, 1e-4), None), (20, "kvaerno5", (1e-6, 1e-5), None),
-                      (10, "heun", None, 1.667e-3), (20, "implicit_euler", None, 2e-3)]},
+                      (10, "heun", None, 1.667e-3), (10, "ros34pw2", (1e-4, 1e-3), None),
+                      (10, "ros34pw2", ROS_TIGHT, None), (20, "ros34pw2", (1e-4, 1e-3), None),
+                      (20, "implicit_euler", None, 2e-3)]},
 }
 
 
@@ -120,7 +127,9 @@ def moorjax_plan(case, quick, table, elements=("linear",)):
 def _linear_plan(case, quick, table):
     if quick:
         return QUICK["moorjax"][case]
-    runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5") for tol in TOLS]
+    runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5", "ros34pw2")
+            for tol in TOLS]
+    runs += [(n, "ros34pw2", ROS_TIGHT, None) for n in NS]
     runs += [(n, "implicit_euler", None, dt) for n in (20, 40) for dt in (1e-3, 2e-3, 5e-3)]
     for n in NS:
         lim = rk2_limit(table, case, n)

@@ -82,7 +82,10 @@ def dynamics_options(d):
                    "them still (default: an example's own motion, else none)")
     d.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
-    d.add_argument("--solver", default="kvaerno5", choices=SOLVERS, help="time stepper")
+    d.add_argument("--solver", default="kvaerno5", choices=("auto",) + SOLVERS,
+                   help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) for "
+                        "decks of lines with the linear element, kvaerno5 with bodies, Hermite "
+                        "lines or bending stiffness")
     element_option(d)
     d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
     d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")

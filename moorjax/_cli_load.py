@@ -47,6 +47,14 @@ def dynamics_settings(args) -> dict:
                 atol_velocity=args.atol_velocity, dt=args.dt, dt_out=args.dt_out)
 
 
+def resolved_settings(kwargs, scene) -> dict:
+    """simulate() keyword arguments with ``solver="auto"`` replaced by the method
+    the run uses for ``scene`` (recorded in output files and ``--stats``)."""
+    from .dynamics.settings import resolve_solver
+
+    return dict(kwargs, solver=resolve_solver(kwargs["solver"], scene))
+
+
 def load_for_dynamics(args, with_motion=False):
     """Deck, scene and simulate() keyword arguments from the shared options
     (and the motion read, with ``with_motion``). Every option is checked here,

@@ -21,7 +21,8 @@ import numpy as np
 from . import __version__
 from ._cli_common import (HelpFormatter, add_subcommand, clip, dynamics_options, element_option,
                           positive_int)
-from ._cli_load import command_line, deck_text, load, load_for_dynamics, motion_path
+from ._cli_load import (command_line, deck_text, load, load_for_dynamics, motion_path,
+                        resolved_settings)
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 
@@ -177,6 +178,7 @@ def cmd_simulate(args) -> int:
 
     check_output(args.out)
     deck, scene, kwargs, motion = load_for_dynamics(args, with_motion=True)
+    kwargs = resolved_settings(kwargs, scene)
     prog = Progress("simulate", enabled(args.quiet))
     prog.say(f"{len(scene.lines)} line(s), {sum(ln.n_segments for ln in scene.lines)} segments, "
              f"{args.duration:g} s; compiling (tens of seconds the first time)…")
@@ -206,7 +208,8 @@ def cmd_simulate(args) -> int:
             steps=int(res.num_steps),
             rejected_steps=int(res.num_rejected_steps),
             accepted_steps=int(res.num_accepted_steps),
-            solver=args.solver,
+            solver=kwargs["solver"],
+            solver_requested=args.solver,
         )
         print(json.dumps(stats), file=sys.stderr)
     return 0

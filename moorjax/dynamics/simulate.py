@@ -75,7 +75,10 @@ def simulate(
             :func:`~moorjax.dynamics.initial.equilibrium_state`; ``RuntimeError``
             if it does not converge), followed by each body's 1-D state
             (default: at rest at η = 0 when only line states are given).
-        solver: a name from :data:`moorjax.dynamics.SOLVERS` or a diffrax solver.
+        solver: a name from :data:`moorjax.dynamics.SOLVERS` (default
+            Kvaerno5; ``"auto"``: ROS34PW2, the Rosenbrock-W method, for scenes
+            of lines with the linear element, else Kvaerno5, see
+            :func:`~moorjax.dynamics.settings.resolve_solver`) or a diffrax solver.
         rtol: relative error-control tolerance (of node positions and velocities).
         atol: absolute tolerance of node positions [m] (default 0.1 mm: a
             tension error of about EA/l·atol).
@@ -134,7 +137,8 @@ def simulate(
             (jnp.asarray(newton), jnp.asarray(evals)), is_leaf=lambda x: x is None,
         )
     if throw and not isinstance(res.num_steps, jax.core.Tracer):
-        failure = failure_cause(res, max_steps, fixed=dt is not None)
+        failure = failure_cause(res, max_steps,
+                                fixed=dt is not None and is_implicit_solver(p.solver))
         if failure is not None:
             where, cause, code = failure
             raise RuntimeError(

@@ -7,7 +7,13 @@ positions are eliminated (``ṙ = v`` makes their rows trivial) and the remainin
 3×3 block-tridiagonal velocity system is factored in O(n)
 (:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`). The chord
 iteration (:class:`~moorjax.dynamics.newton.StageChord`, :data:`NEWTON`) tests
-convergence on the stage state. Explicit methods are there for comparison.
+convergence on the stage state. The linearly implicit ROS34PW2
+(:mod:`~moorjax.dynamics.rosenbrock`, ``"ros34pw2"``) solves each of its four
+stages with one band solve and no Newton iteration, with a Jacobian
+approximation W that the linear element assembles from its stiff terms
+(:func:`~moorjax.dynamics.vector_field.stiff_band`); it is what
+``solver="auto"`` picks for scenes of such lines. Explicit methods are there
+for comparison.
 
 Error control measures positions [m] and velocities [m/s] on separate absolute
 scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
@@ -25,8 +31,9 @@ from jaxtyping import Array
 
 from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
 from .newton import StageChord, VeryChord
+from .rosenbrock import RosenbrockW
 
-__all__ = ["IMPLICIT", "EXPLICIT", "SOLVERS", "LINEAR_SOLVERS", "StateNorm", "make_solver",
+__all__ = ["IMPLICIT", "EXPLICIT", "LINEARLY_IMPLICIT", "SOLVERS", "LINEAR_SOLVERS", "StateNorm", "make_solver",
            "is_implicit", "StageChord", "VeryChord"]
 
 IMPLICIT = {
@@ -45,7 +52,12 @@ EXPLICIT = {
     "bosh3": diffrax.Bosh3,
     "euler": diffrax.Euler,
 }
-SOLVERS = tuple(sorted(IMPLICIT) + sorted(EXPLICIT))
+#: Rosenbrock-W methods: one matrix per step, no Newton iteration (see
+#: :mod:`moorjax.dynamics.rosenbrock`)
+LINEARLY_IMPLICIT = {
+    "ros34pw2": RosenbrockW,
+}
+SOLVERS = tuple(sorted(IMPLICIT) + sorted(LINEARLY_IMPLICIT) + sorted(EXPLICIT))
 
 
 LINEAR_SOLVERS = ("reduced", "block", "dense")
@@ -117,6 +129,14 @@ def make_solver(
     key = name.lower().replace("-", "_")
     if key in EXPLICIT:
         return EXPLICIT[key]()
+    if key in LINEARLY_IMPLICIT:
+        if linear_solver not in LINEAR_SOLVERS:
+            raise ValueError(f"unknown linear solver {linear_solver!r}; choose one of "
+                             f"{', '.join(LINEAR_SOLVERS)}")
+        from .vector_field import stiff_band
+
+        structured = not dense_newton and linear_solver != "dense"
+        return LINEARLY_IMPLICIT[key](structured=structured, band=stiff_band if structured else None)
     if key not in IMPLICIT:
         raise ValueError(f"unknown solver {name!r}; choose one of {', '.join(SOLVERS)}")
     if dense_newton:

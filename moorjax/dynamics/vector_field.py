@@ -198,3 +198,25 @@ def end_outputs(t, y, scene, with_nodes: bool = False):
         out["velocities"] = tuple(vel)
         out["segment_tensions"] = tuple(ten)
     return out
+
+
+def has_stiff_band(scene) -> bool:
+    """Whether :func:`stiff_band` gives a band for ``scene`` (structure only)."""
+    return not scene.bodies and all(line.element.provides_stiff_band(line) for line in scene.lines)
+
+
+def stiff_band(t, y, scene):
+    """W ≈ ∂(vector field)/∂y for a Rosenbrock-W stepper: each line's
+    :meth:`~moorjax.element.base.AbstractElement.stiff_band` stacked along the
+    node axis (``(lower, diag, upper)``, the layout of
+    :func:`~moorjax.linalg.banded_solver.band_of`), or ``None`` (decided at trace
+    time) when the scene has bodies or some line's element has no such band."""
+    if scene.bodies:
+        return None
+    parts = []
+    for line, q in zip(scene.lines, y):
+        band = line.element.stiff_band(line, scene.env, t, q)
+        if band is None:
+            return None
+        parts.append(band)
+    return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))

@@ -51,6 +51,20 @@ class AbstractElement(eqx.Module):
     # :class:`~moorjax.model.line.LineState`); an element with more unknowns per
     # node (slopes) overrides these four and packs them in more rows.
 
+    def provides_stiff_band(self, line) -> bool:
+        """Whether :meth:`stiff_band` returns a band for ``line``."""
+        del line
+        return False
+
+    def stiff_band(self, line, env, t, q):
+        """An approximation W of the Jacobian of :meth:`state_rate` for a
+        Rosenbrock-W stepper: ``(lower, diag, upper)``, each (rows, 6, 6) in the
+        packed [r, v] layout (``lower[i]`` couples row i to row i−1), or ``None``
+        when the element has none (the stepper then differentiates the whole
+        vector field). Default: ``None``."""
+        del line, env, t, q
+        return None
+
     def state_rate(self, line, env, t, q):
         """dq/dt (rows, 6) of the packed state q at time t [s]."""
         from ..model.line import LineState

@@ -40,7 +40,10 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+import jax
+
 from .._numerics import abs_times, safe_unit
+from ..linalg import block_tridiagonal as btd
 from ..model.ends import clamp_directions
 from .base import AbstractElement
 from .mass import AbstractMass, NodalMass
@@ -163,6 +166,98 @@ class LinearElement(AbstractElement):
     def end_forces(self, line, env, r, v, t=0.0):
         force = self.nodal_forces(line, env, r, v, t)
         return force[0], force[-1]
+
+    def provides_stiff_band(self, line) -> bool:
+        return self.line_banded(line)
+
+    def stiff_band(self, line, env, t, q):
+        """W ≈ ∂(state rate)/∂q from the terms that make a line stiff, each
+        differentiated exactly on its own small function (forward mode), then
+        M⁻¹ applied (see :func:`stiff_band`). ``None`` for lines with bending
+        (their Jacobian is not block-tridiagonal)."""
+        if not self.provides_stiff_band(line):
+            return None
+        return stiff_band(self, line, env, t, q)
+
+
+def stiff_band(element, line, env, t, q):
+    """Block-tridiagonal W ≈ ∂[v, a]/∂[r, v] of a line's free nodes (rows, 6, 6 ×3).
+
+    Exact for the terms that make a mooring line stiff, each differentiated by
+    forward mode on its own small function rather than through the whole
+    vector field (18 coloured JVPs of it cost ~30 evaluations of it):
+
+    - the segment tension T(ℓ, ṡ)·t (elastic law and internal damping; 6 JVPs
+      of the per-segment force in the chord d and the relative velocity Δv);
+    - the seabed contact (spring, damping ramp, friction; node-local, 6 JVPs);
+    - the Morison drag's dependence on the node velocities (node-local with the
+      tangents held, 3 JVPs).
+
+    Left out (non-stiff, and a W-method keeps its order with any W): the
+    dependence of the mass matrix (added mass), drag, fluid inertia and
+    buoyancy on the tangents and wet lengths, and of currents and waves on the
+    node positions. a = M⁻¹F with M the nodal mass at the current tangents.
+    """
+    from ..model.line import LineState
+    from .mass import _segment_mass_tensors
+
+    lt = line.line_type
+    l = line.segment_length
+    r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
+    d, dv = r[1:] - r[:-1], v[1:] - v[:-1]
+
+    def segment_force(d, dv):
+        tangent, stretched = safe_unit(d)
+        tension = lt.axial.tension(stretched / l - 1.0) + lt.damping * jnp.sum(tangent * dv, -1) / l
+        return tension[:, None] * tangent
+
+    def columns(fn, x):
+        """(rows, 3 out, 3 in) node- or segment-local Jacobian of fn at x (rows, 3)."""
+        seeds = jnp.broadcast_to(jnp.eye(3)[:, None, :], (3,) + x.shape)
+        cols = jax.vmap(lambda e: jax.jvp(fn, (x,), (e,))[1])(seeds)  # (3 in, rows, 3 out)
+        return jnp.moveaxis(cols, 0, -1)
+
+    k_d = columns(lambda x: segment_force(x, dv), d)  # (n, 3, 3) ∂f_j/∂d_j
+    k_v = columns(lambda x: segment_force(d, x), dv)
+    # node k gets +f_k (as the left node of segment k) and −f_{k−1}
+    zero = jnp.zeros_like(k_d[:1])
+    f_r_self = -jnp.concatenate([k_d, zero]) - jnp.concatenate([zero, k_d])  # (n+1, 3, 3)
+    f_v_self = -jnp.concatenate([k_v, zero]) - jnp.concatenate([zero, k_v])
+    f_r_next, f_v_next = k_d, k_v  # ∂F_k/∂x_{k+1} = +K_k (k = 0..n−1)
+    f_r_prev, f_v_prev = k_d, k_v  # ∂F_k/∂x_{k−1} = +K_{k−1} (k = 1..n)
+
+    tangent, stretched = safe_unit(d)
+    node_len = _node_lengths(line)
+    if env.seabed is not None:
+        f_r_self = f_r_self + columns(lambda x: _seabed(lt, env, x, v, node_len), r)
+        f_v_self = f_v_self + columns(lambda x: _seabed(lt, env, r, x, node_len), v)
+    if lt.drag is not None:
+        frac = submerged_fraction(r[:, 2])
+        if env.waves is not None:
+            frac = submerged_fraction(r[:, 2] - env.waves.kinematics(r, t)[0])
+        wet = stretched * frac
+
+        def drag(u):
+            return _to_nodes(_drag(lt, env, u[:-1], tangent, wet), _drag(lt, env, u[1:], tangent, wet))
+
+        f_v_self = f_v_self + columns(drag, v)  # relative velocity: ∂u/∂v = I
+
+    mu = _segment_mass_tensors(line, env, tangent, stretched)
+    m_inv = btd.inv3(0.5 * (mu[:-1] + mu[1:]))  # free nodes 1..n−1
+
+    def rows(f_r, f_v):
+        a = jnp.concatenate([m_inv @ f_r, m_inv @ f_v], axis=-1)  # (n−1, 3, 6)
+        return a
+
+    n_free = q.shape[0]
+    top = jnp.zeros((n_free, 3, 6))
+    eye_top = top.at[:, :, 3:].set(jnp.eye(3))
+    diag = jnp.concatenate([eye_top, rows(f_r_self[1:-1], f_v_self[1:-1])], axis=1)
+    lower = jnp.concatenate([top, rows(f_r_prev[:-1], f_v_prev[:-1])], axis=1)  # K_{k−1}, k=1..n−1
+    upper = jnp.concatenate([top, rows(f_r_next[1:], f_v_next[1:])], axis=1)  # K_k, k=1..n−1
+    lower = lower.at[0].set(0.0)  # node 0 is an end, not a state
+    upper = upper.at[-1].set(0.0)  # node n likewise
+    return lower, diag, upper
 
 
 def bending_energy(ei, l, r):

@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from .._cli_common import add_subcommand, dynamics_options, positive_int
-from .._cli_load import command_line, load_for_dynamics, motion_path
+from .._cli_load import command_line, load_for_dynamics, motion_path, resolved_settings
 
 
 def add_parser(subparsers):
@@ -46,6 +46,7 @@ def cmd_ensemble(args) -> int:
     if not os.path.isdir(parent):
         raise ValueError(f"--out {args.out}: folder {parent} does not exist")
     _, scene, kwargs = load_for_dynamics(args)
+    kwargs = resolved_settings(kwargs, scene)
     members, table = sweep(scene, varies)
     prog = Progress("ensemble", enabled(args.quiet))
     n_chunks = -(-len(members) // min(args.chunk_size, len(members)))

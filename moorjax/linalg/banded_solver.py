@@ -96,7 +96,11 @@ class BlockTridiagonalSolver(lx.AbstractLinearSolver):
     """lineax solver exploiting the block-banded Jacobian of line states (O(n))."""
 
     def _init_band(self, operator):
-        lower, diag, upper, treedef, sizes = band_of(operator.mv, operator.in_structure())
+        return self.factor_bands(*band_of(operator.mv, operator.in_structure()))
+
+    def factor_bands(self, lower, diag, upper, treedef, sizes):
+        """The solver state of the block-tridiagonal matrix with these bands (as
+        :func:`band_of` returns them), for :meth:`compute`."""
         lu = btd.factor(lower, diag, upper)
         return _State(lower, diag, upper, lu, treedef, sizes)
 
@@ -178,8 +182,7 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
     way (see :meth:`transpose`).
     """
 
-    def _init_band(self, operator):
-        lower, diag, upper, treedef, sizes = band_of(operator.mv, operator.in_structure())
+    def factor_bands(self, lower, diag, upper, treedef, sizes):
         if diag.shape[-1] != 6:
             raise ValueError(f"SecondOrderBandSolver needs 6 dofs per node (r, v); got {diag.shape[-1]}")
         p_inv = btd.inv3(diag[:, :3, :3])

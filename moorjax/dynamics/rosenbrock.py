@@ -1,0 +1,285 @@
+"""A linearly implicit (Rosenbrock-W) time stepper: one matrix per step, no Newton iteration.
+
+ROS34PW2 (Rang & Angermann 2005, *New Rosenbrock W-methods of order 3 for
+partial differential algebraic equations of index 1*, BIT 45, 761–787): 4
+stages, order 3 with an embedded order-2 solution, L-stable and stiffly
+accurate, and a W-method (its order conditions hold, to order 2, for any
+matrix W in place of the Jacobian ∂f/∂y). In Hairer & Wanner's transformed
+variables (Solving ODEs II, IV.7, Eq. 7.25), u = Γk:
+
+    (1/(γh) − W) uᵢ = f(tₙ + αᵢh, yₙ + Σⱼ₍ⱼ<ᵢ₎ ãᵢⱼ uⱼ) + Σⱼ₍ⱼ<ᵢ₎ (c̃ᵢⱼ/h) uⱼ + γᵢ h ∂f/∂t
+    yₙ₊₁ = yₙ + Σ mⱼ uⱼ,   error estimate Σ (mⱼ − m̂ⱼ) uⱼ
+
+with ã = AΓ⁻¹, c̃ = diag(1/γ) − Γ⁻¹, m = bΓ⁻¹ (m̂ from the embedded weights).
+
+Every stage is one linear solve with the same matrix and no Newton iteration,
+so a step cannot fail to converge: at the kinks of touchdown and slack, where
+the Kvaerno methods' Newton stalls and their steps are rejected, this method
+only loses accuracy. The embedded estimate alone does not see that loss: a
+force that switches on within a step (a node landing on the seabed) is
+treated explicitly by both solutions alike. On a 410 m chain settling on a
+soft seabed in waves (``wavekin_3.txt`` of MoorDyn's tests, MoorDyn's seabed
+damping step) 47 steps of about 1 s were all accepted while the fairlead
+tension grew into an oscillation of 1.6 MN (93× the reference's std). So each
+step also measures its linearisation error: the residual of f(t₁, y₁) against
+the step's linear model, as the state correction a Newton iteration would
+make (:meth:`RosenbrockW._with_linearisation_error`), O(h³) where f is smooth.
+With it the same run takes 71 steps (5 rejected) and stays within 0.29 std
+(6.4 % at rtol 3e-6), and reference case A reaches Kvaerno5's error at the same
+tolerances (N = 40, rtol 1e-5: 0.82 % against 0.84 %; without the check
+1.09 %). The matrix I − γhW is built
+from W's block-tridiagonal band (18 coloured JVPs of the vector field) and
+factored by the reduced 3×3 block solve of
+:class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`. ∂f/∂t (the
+prescribed motions) is one forward-mode derivative per step: without it the
+method drops to order 1 on a line whose end is driven (measured on a forced
+stiff scalar problem, ``tests/test_rosenbrock.py``).
+
+W is the Jacobian at the step's start by default. ``jacobian_age`` > 1 keeps it
+for that many accepted steps (rebuilding it also after a step cut below
+``shrink``·(previous step), usually a rejection), which the W-method's order
+tolerates but its accuracy on mooring lines does not: on reference case A
+(chain catenary with seabed contact, N = 40, rtol 1e-5) a Jacobian kept for 2
+steps raised the fairlead-tension error from 1.1 % to 5.6 %, since the contact
+stiffness of the nodes that touch down or lift off is stale in W (at a fixed
+40 ms step a kept W diverged). Measured costs are in ``benchmarks/README.md``.
+
+First same as last: f(tₙ₊₁, yₙ₊₁) is evaluated at the end of each step, serves
+the cubic Hermite dense output and is the next step's f(tₙ, yₙ); a step costs
+four vector-field evaluations, one time derivative, the band, one
+factorisation and four solves.
+
+W is not differentiated (``stop_gradient``): gradients are those of the
+W-method with its matrix held fixed, a consistent discretisation of the
+sensitivities (the order conditions of a W-method do not involve W).
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.tree_util as jtu
+import numpy as np
+from jax import lax
+from jax.flatten_util import ravel_pytree
+
+from ..linalg import block_tridiagonal as btd
+from ..linalg.banded_solver import SecondOrderBandSolver, band_of
+
+
+
+class Tableau(eqx.Module):
+    """A Rosenbrock(-W) method in Hairer & Wanner's form (A strictly lower, Γ lower
+    triangular with the diagonal γ, weights b and embedded weights b̂), stored in the
+    transformed variables the step uses."""
+
+    gamma: float = eqx.field(static=True)
+    a_t: tuple = eqx.field(static=True)  # AΓ⁻¹ (rows of the strictly lower part)
+    c_t: tuple = eqx.field(static=True)  # diag(1/γ) − Γ⁻¹, off-diagonal part
+    alpha: tuple = eqx.field(static=True)  # stage times Σⱼ aᵢⱼ
+    gamma_sum: tuple = eqx.field(static=True)  # Σⱼ₍ⱼ≤ᵢ₎ γᵢⱼ (∂f/∂t weights)
+    m: tuple = eqx.field(static=True)  # bΓ⁻¹
+    m_err: tuple = eqx.field(static=True)  # (b − b̂)Γ⁻¹
+    order: int = eqx.field(static=True)
+
+    @classmethod
+    def from_hairer_wanner(cls, gamma, a, g, b, b_hat, order):
+        a, g = np.asarray(a, float), np.asarray(g, float)
+        s = a.shape[0]
+        big_g = g + gamma * np.eye(s)
+        g_inv = np.linalg.inv(big_g)
+        rows = lambda m: tuple(tuple(float(x) for x in r) for r in m)  # noqa: E731
+        return cls(
+            gamma=float(gamma),
+            a_t=rows(a @ g_inv),
+            c_t=rows(np.diag(np.full(s, 1.0 / gamma)) - g_inv),
+            alpha=tuple(float(x) for x in a.sum(axis=1)),
+            gamma_sum=tuple(float(x) for x in big_g.sum(axis=1)),
+            m=tuple(float(x) for x in np.asarray(b) @ g_inv),
+            m_err=tuple(float(x) for x in (np.asarray(b) - np.asarray(b_hat)) @ g_inv),
+            order=int(order),
+        )
+
+
+#: Rang & Angermann (2005), ROS34PW2
+ROS34PW2 = Tableau.from_hairer_wanner(
+    gamma=4.3586652150845900e-1,
+    a=[[0, 0, 0, 0],
+       [8.7173304301691801e-1, 0, 0, 0],
+       [8.4457060015369423e-1, -1.1299064236484185e-1, 0, 0],
+       [0, 0, 1, 0]],
+    g=[[0, 0, 0, 0],
+       [-8.7173304301691801e-1, 0, 0, 0],
+       [-9.0338057013044082e-1, 5.4180672388095326e-2, 0, 0],
+       [2.4212380706095346e-1, -1.2232505839045147, 5.4526025533510214e-1, 0]],
+    b=[2.4212380706095346e-1, -1.2232505839045147, 1.5452602553351020, 4.3586652150845900e-1],
+    b_hat=[3.7810903145819369e-1, -9.6042292212423178e-2, 0.5, 2.1793326075422950e-1],
+    order=3,
+)
+
+
+class _State(eqx.Module):
+    f0: Any  # f(t_n, y_n) (FSAL)
+    jac: Any  # the Jacobian W: bands (lower, diag, upper) or a dense matrix
+    age: Any  # accepted steps since W was built
+    h_prev: Any  # the last accepted step [s]
+
+
+def _combine(terms_):
+    """Σ cᵢ·xᵢ over pytrees, skipping zero coefficients (static)."""
+    terms_ = [(c, x) for c, x in terms_ if not (isinstance(c, float) and c == 0.0)]
+    return jtu.tree_map(lambda *xs: sum(c * x for (c, _), x in zip(terms_, xs)),
+                        *[x for _, x in terms_])
+
+
+class RosenbrockW(diffrax.AbstractAdaptiveSolver):
+    """A Rosenbrock-W method (see the module): ``"ros34pw2"`` by name.
+
+    Args:
+        tableau: the method (default :data:`ROS34PW2`).
+        jacobian_age: accepted steps between Jacobian rebuilds (default 1: every
+            step; see the module for why more is not the default).
+        shrink: a step shorter than this fraction of the last accepted one (a
+            rejection, usually at a kink) rebuilds the Jacobian.
+        structured: ``True`` (default): the Jacobian's block-tridiagonal band from
+            18 coloured JVPs and the reduced 3×3 block solve (line states of
+            (n, 6) [r, v] rows only); ``False``: a dense Jacobian (``jacfwd``)
+            and LU, for any state (bodies, consistent-mass elements).
+    """
+
+    term_structure: ClassVar = diffrax.AbstractTerm
+    interpolation_cls: ClassVar = diffrax.ThirdOrderHermitePolynomialInterpolation
+    tableau: Tableau = ROS34PW2
+    jacobian_age: int = eqx.field(static=True, default=1)
+    shrink: float = eqx.field(static=True, default=0.7)
+    structured: bool = eqx.field(static=True, default=True)
+    #: ``band(t, y, args)``: W's block-tridiagonal band, or ``None`` (then and
+    #: without it, the band of the exact Jacobian from 18 coloured JVPs)
+    band: Any = eqx.field(static=True, default=None)
+    #: add the linearisation error of the step to its error estimate (see
+    #: :meth:`_with_linearisation_error`)
+    linearisation_check: bool = eqx.field(static=True, default=True)
+
+    def order(self, terms):
+        del terms
+        return self.tableau.order
+
+    def error_order(self, terms):
+        del terms
+        return self.tableau.order  # the embedded solution's local error is O(h^order)
+
+    # -- the Jacobian and the stage matrix ------------------------------------
+    def _jacobian(self, terms, t, y, args):
+        y = lax.stop_gradient(y)
+
+        def f(z):
+            return terms.vf(t, z, args)
+
+        if self.structured:
+            band = None if self.band is None else self.band(t, y, args)
+            if band is not None:
+                return lax.stop_gradient(band)
+            lower, diag, upper, _, _ = band_of(lambda v: jax.jvp(f, (y,), (v,))[1], y)
+            return lax.stop_gradient((lower, diag, upper))
+        flat, unravel = ravel_pytree(y)
+        jac = jax.jacfwd(lambda z: ravel_pytree(f(unravel(z)))[0])(flat)
+        return lax.stop_gradient(jac)
+
+    def _factor(self, jac, c, y):
+        """The factorisation of I − c·W."""
+        if self.structured:
+            lower, diag, upper = jac
+            eye = jnp.eye(diag.shape[-1], dtype=diag.dtype)
+            leaves, treedef = jtu.tree_flatten(y)
+            sizes = tuple(int(x.shape[0]) for x in leaves)
+            return SecondOrderBandSolver().factor_bands(
+                -c * lower, eye - c * diag, -c * upper, treedef, sizes)
+        n = jac.shape[0]
+        return jax.scipy.linalg.lu_factor(jnp.eye(n, dtype=jac.dtype) - c * jac)
+
+    def _apply(self, jac, v):
+        """W·v (same pytree as v)."""
+        if self.structured:
+            leaves, treedef = jtu.tree_flatten(v)
+            sizes = [x.shape[0] for x in leaves]
+            flat = jnp.concatenate([jnp.reshape(x, (x.shape[0], -1)) for x in leaves], axis=0)
+            out = btd.matvec(*jac, flat)
+            parts = jnp.split(out, list(np.cumsum(sizes)[:-1]), axis=0)
+            return jtu.tree_unflatten(treedef, [p.reshape(x.shape) for p, x in zip(parts, leaves)])
+        flat, unravel = ravel_pytree(v)
+        return unravel(jac @ flat)
+
+    def _with_linearisation_error(self, y_error, jac, lu, c, h, y0, y1, f0, f_t, f_end):
+        """The error estimate, raised where the step's linearisation was poor.
+
+        The residual of the vector field at the step's end against its linear
+        model, r = f(t₁, y₁) − [f₀ + W(y₁ − y₀) + h ∂f/∂t], mapped to the state
+        change one Newton correction of the implicit step would make,
+        (I − γhW)⁻¹ γh r: O(h³) where f is smooth (the embedded estimate's
+        order), large where a force switched on or off within the step (a node
+        landing on the seabed, a slack segment going taut) or where W misses a
+        stiff term. Combined with the embedded estimate as √(e² + d²).
+        """
+        dy = jtu.tree_map(lambda a, b: a - b, y1, y0)
+        lin = _combine([(1.0, f0), (1.0, self._apply(jac, dy)), (h, f_t)])
+        residual = jtu.tree_map(lambda a, b: c * (a - b), f_end, lin)
+        correction = self._solve(lu, residual)
+        return jtu.tree_map(lambda e, d: jnp.sqrt(e * e + d * d), y_error, correction)
+
+    def _solve(self, lu, rhs):
+        if self.structured:
+            return SecondOrderBandSolver()._compute_band(lu, rhs)
+        flat, unravel = ravel_pytree(rhs)
+        return unravel(jax.scipy.linalg.lu_solve(lu, flat))
+
+    # -- the diffrax solver interface -------------------------------------------
+    def init(self, terms, t0, t1, y0, args):
+        f0 = terms.vf(t0, y0, args)
+        return _State(f0, self._jacobian(terms, t0, y0, args), jnp.asarray(0),
+                      jnp.asarray(t1 - t0, dtype=float))
+
+    def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        tab, st = self.tableau, solver_state
+        h = t1 - t0
+        # plain jnp/lax only (no equinox-internal primitives): the integration
+        # must stay exportable (moorjax._cache.StoredProgram)
+        if isinstance(made_jump, bool):  # diffrax passes a static False without jumps
+            f0 = terms.vf(t0, y0, args) if made_jump else st.f0
+        else:
+            f0 = jtu.tree_map(lambda a, b: jnp.where(made_jump, a, b), terms.vf(t0, y0, args), st.f0)
+        if self.jacobian_age <= 1:
+            jac, age = self._jacobian(terms, t0, y0, args), st.age
+        else:
+            stale = (st.age >= self.jacobian_age) | (h < self.shrink * st.h_prev) | made_jump
+            jac = lax.cond(stale, lambda: self._jacobian(terms, t0, y0, args), lambda: st.jac)
+            age = jnp.where(stale, 0, st.age)
+        c = tab.gamma * h
+        lu = self._factor(jac, c, y0)
+        # ∂f/∂t (the prescribed motions), one forward-mode derivative
+        f_t = jax.jvp(lambda t: terms.vf(t, y0, args), (t0,), (jnp.ones_like(t0),))[1]
+        u = []
+        for i in range(len(tab.alpha)):
+            if i == 0:
+                f_i = f0
+            else:
+                y_i = _combine([(1.0, y0)] + [(tab.a_t[i][j], u[j]) for j in range(i)])
+                f_i = terms.vf(t0 + tab.alpha[i] * h, y_i, args)
+            rhs = _combine([(1.0, f_i), (tab.gamma_sum[i] * h, f_t)]
+                           + [(tab.c_t[i][j] / h, u[j]) for j in range(i) if tab.c_t[i][j] != 0.0])
+            u.append(self._solve(lu, jtu.tree_map(lambda x: c * x, rhs)))
+        y1 = _combine([(1.0, y0)] + list(zip(tab.m, u)))
+        y_error = _combine(list(zip(tab.m_err, u)))
+        f_end = terms.vf(t1, y1, args)
+        if self.linearisation_check:
+            y_error = self._with_linearisation_error(y_error, jac, lu, c, h, y0, y1, f0, f_t, f_end)
+        dense_info = dict(y0=y0, y1=y1, k0=jtu.tree_map(lambda a: h * a, f0),
+                          k1=jtu.tree_map(lambda a: h * a, f_end))
+        new_state = _State(f_end, jac, age + 1, jnp.asarray(h, dtype=float))
+        return y1, y_error, dense_info, new_state, diffrax.RESULTS.successful
+
+    def func(self, terms, t0, y0, args):
+        return terms.vf(t0, y0, args)

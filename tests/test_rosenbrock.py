@@ -1,0 +1,210 @@
+"""The Rosenbrock-W stepper ROS34PW2 (``solver="ros34pw2"``, moorjax/dynamics/rosenbrock.py).
+
+* its order on problems with known solutions: 3 on a non-stiff forced problem,
+  2 (Prothero–Robinson order reduction, small constant) on a stiff one, and at
+  least 2 with a wrong matrix W (the W-method property the option of keeping
+  the Jacobian rests on);
+* the ∂f/∂t term: the driven line needs it (on a linear problem its
+  contributions cancel in ROS34PW2's solution);
+* on a mooring line (case B, slack–snap polyester-like line) against a
+  converged Kvaerno5 run; the dense and the structured linear algebra agree;
+* it runs under ``vmap`` (ensembles) and its reverse-mode gradient matches a
+  central difference.
+"""
+
+import dataclasses
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from moorjax.dynamics import simulate
+from moorjax.dynamics.rosenbrock import ROS34PW2, RosenbrockW
+from moorjax.dynamics.solvers import SOLVERS, make_solver
+from scenes import case_b_scene
+
+H = (0.1, 0.05, 0.025, 0.0125)
+
+
+def _final(f, solver, h, y0, t1=2.0, args=None):
+    sol = diffrax.diffeqsolve(diffrax.ODETerm(f), solver, 0.0, t1, h, jnp.asarray(y0), args=args,
+                              saveat=diffrax.SaveAt(t1=True),
+                              stepsize_controller=diffrax.ConstantStepSize())
+    return np.asarray(sol.ys[-1])
+
+
+def _slopes(errors):
+    e = np.asarray(errors)
+    return np.log2(e[:-1] / e[1:])
+
+
+def _forced(t, y, lam):
+    """y' = −λ(y − sin t) + cos t, y(0) = 0: y = sin t for every λ."""
+    return -lam * (y - jnp.sin(t)) + jnp.cos(t)
+
+
+@pytest.mark.parametrize("lam, order, tol", [(1.0, 3, 1e-5), (1e3, 2, 1e-6)])
+def test_order_on_a_forced_problem(lam, order, tol):
+    solver = RosenbrockW(structured=False)
+    errors = [abs(_final(_forced, solver, h, [0.0], args=lam)[0] - np.sin(2.0)) for h in H]
+    slopes = _slopes(errors)
+    print("λ", lam, "errors", errors, "slopes", slopes)
+    assert np.all(slopes > order - 0.3), slopes
+    assert errors[0] < tol
+
+
+class _OffJacobian(RosenbrockW):
+    """W = 0.3·J + 0.2 (a wrong matrix)."""
+
+    def _jacobian(self, terms, t, y, args):
+        return 0.3 * super()._jacobian(terms, t, y, args) + 0.2
+
+
+def test_w_method_keeps_order_two_with_a_wrong_matrix():
+    def f(t, y, args):
+        return jnp.array([y[1], -y[0] - 0.3 * y[1] ** 3])
+
+    ref = diffrax.diffeqsolve(diffrax.ODETerm(f), diffrax.Tsit5(), 0.0, 2.0, 1e-3,
+                              jnp.array([0.0, 1.0]), saveat=diffrax.SaveAt(t1=True),
+                              stepsize_controller=diffrax.ConstantStepSize()).ys[-1]
+    errors = [np.max(np.abs(_final(f, _OffJacobian(structured=False), h, [0.0, 1.0]) - ref))
+              for h in H]
+    assert np.all(_slopes(errors) > 1.8), errors
+
+
+def test_registered_by_name():
+    assert "ros34pw2" in SOLVERS
+    solver = make_solver("ros34pw2")
+    assert isinstance(solver, RosenbrockW) and solver.structured
+    assert not make_solver("ros34pw2", linear_solver="dense").structured
+
+
+def _case_b_error(scene, solver, ref, **kw):
+    res = simulate(scene, 6.0, solver=solver, **kw)
+    t_ref, t_ros = np.asarray(ref.tension_b[:, 0]), np.asarray(res.tension_b[:, 0])
+    return res, np.sqrt(np.mean((t_ros - t_ref) ** 2)) / np.std(t_ref)
+
+
+@pytest.mark.slow
+def test_case_b_against_converged_kvaerno5():
+    """Case B (N = 10, 6 s, slack and snap) at default tolerances: the fairlead
+    tension within 0.3 % of its std of a converged Kvaerno5 run, with the
+    element's W and with the exact Jacobian (band or dense: the same run)."""
+    scene = case_b_scene(n=10)
+    ref = simulate(scene, 6.0, solver="kvaerno5", rtol=1e-8, atol=1e-7)
+    res, err = _case_b_error(scene, "ros34pw2", ref)
+    t_ref, t_ros = np.asarray(ref.tension_b[:, 0]), np.asarray(res.tension_b[:, 0])
+    print("ros34pw2 steps", int(res.num_steps), "rejected", int(res.num_rejected_steps),
+          "error / std", err, "max tension", t_ref.max())
+    assert t_ref.max() > 1.5e6  # it snaps
+    assert err < 3e-3
+    # ∂f/∂t (the driven fairlead) is needed: without it, at rtol 1e-4, the error grows
+    no_ft = RosenbrockW(tableau=dataclasses.replace(ROS34PW2, gamma_sum=(0.0,) * 4))
+    _, err_ft = _case_b_error(scene, RosenbrockW(), ref, rtol=1e-4, atol=1e-3)
+    _, err_no_ft = _case_b_error(scene, no_ft, ref, rtol=1e-4, atol=1e-3)
+    print("rtol 1e-4: error / std with ∂f/∂t", err_ft, "without", err_no_ft)
+    assert err_no_ft > 1.5 * err_ft
+    # the exact Jacobian's band (18 coloured JVPs) and the dense Jacobian give the
+    # same run; the element's W (what "ros34pw2" uses) another, equally accurate
+    exact_band = simulate(scene, 6.0, solver=RosenbrockW())
+    dense = simulate(scene, 6.0, solver=RosenbrockW(structured=False))
+    np.testing.assert_allclose(np.asarray(dense.tension_b[:, 0]),
+                               np.asarray(exact_band.tension_b[:, 0]), rtol=1e-6,
+                               atol=1e-6 * t_ref.max())
+    _, err_exact = _case_b_error(scene, RosenbrockW(), ref)
+    print("error / std with the exact Jacobian", err_exact)
+    assert err_exact < 3e-3
+
+
+@pytest.mark.slow
+def test_ensemble_and_gradient():
+    """vmap over two drag coefficients gives the single runs; d(mean tension)/d(Cd)
+    through a fixed-step run matches a central difference."""
+    from moorjax.ensemble import simulate_ensemble
+    from moorjax.model.parameters import get_parameter, set_parameter
+
+    base = case_b_scene(n=6)
+    cd = float(get_parameter(base, "Cd"))
+    members = [set_parameter(base, "Cd", cd * k) for k in (0.8, 1.2)]
+    ens = simulate_ensemble(members, 2.0, solver="ros34pw2")
+    for i, m in enumerate(members):
+        one = simulate(m, 2.0, solver="ros34pw2")
+        np.testing.assert_allclose(np.asarray(ens.tension_b[i]), np.asarray(one.tension_b),
+                                   rtol=1e-5)
+
+    from moorjax.dynamics.settings import plan
+    from moorjax.dynamics.vector_field import pack
+    from moorjax.statics import solve_line_statics
+
+    y0 = pack(tuple(solve_line_statics(ln, base.env).state() for ln in base.lines))
+    settings = plan(1.0, solver="ros34pw2", dt=0.01, scene=base)
+
+    @jax.jit
+    def mean_tension(x):
+        scene = set_parameter(base, "Cd", x)
+        return jnp.mean(settings.run(scene, y0).tension_b)
+
+    g = float(jax.grad(mean_tension)(jnp.asarray(cd)))
+    d = 1e-4 * cd
+    fd = (float(mean_tension(cd + d)) - float(mean_tension(cd - d))) / (2 * d)
+    print("d mean T / d Cd", g, "central difference", fd)
+    assert abs(g - fd) < 1e-4 * abs(fd) + 1e-6
+
+
+def test_equinox_module_is_hashable_static():
+    # the tableau is static: two solvers of the same settings compile once
+    a, b = RosenbrockW(), RosenbrockW()
+    assert eqx.tree_equal(a, b)
+
+
+@pytest.mark.parametrize("terms", ["all", "stiff only"])
+def test_stiff_band_against_the_full_jacobian(terms):
+    """The linear element's W (tension, seabed, drag differentiated on their own)
+    against the band of the whole vector field's Jacobian (18 coloured JVPs).
+
+    Without drag and added mass ("stiff only"), on moving nodes one of which is
+    pressed into the seabed: exact. With them ("all"): the velocity columns are
+    exact; the position columns leave out the tangent dependence of the added
+    mass (a term ∝ the net force, i.e. the acceleration) and of the drag (∝ the
+    relative velocity), so at rest in equilibrium they agree too."""
+    from moorjax.dynamics.vector_field import pack, stiff_band, vector_field
+    from moorjax.linalg.banded_solver import band_of
+    from moorjax.statics import solve_line_statics
+
+    scene = case_b_scene(n=8)
+    if terms == "stiff only":
+        scene = eqx.tree_at(lambda s: (s.lines[0].line_type.drag, s.lines[0].line_type.added_mass),
+                            scene, (None, None), is_leaf=lambda x: x is None)
+    y = pack(tuple(solve_line_statics(ln, scene.env).state() for ln in scene.lines))
+    t = 0.0
+    if terms == "stiff only":  # moving nodes, the first pressed 1 cm into the seabed
+        y = tuple(q.at[:, 3:].add(0.3 * jnp.sin(jnp.arange(q.shape[0]))[:, None])
+                  .at[0, 2].set(-80.01) for q in y)
+        t = 1.3
+    exact = band_of(lambda v: jax.jvp(lambda z: vector_field(t, z, scene), (y,), (v,))[1], y)[:3]
+    approx = stiff_band(t, y, scene)
+    for a, w in zip(exact, approx):
+        a, w = np.asarray(a), np.asarray(w)
+        scale = np.abs(a).max()
+        np.testing.assert_allclose(w[:, :, 3:], a[:, :, 3:], atol=1e-12 * scale)  # ∂/∂v
+        tol = 1e-12 if terms == "stiff only" else 1e-4  # the statics residual
+        np.testing.assert_allclose(w[:, :, :3], a[:, :, :3], atol=tol * scale)  # ∂/∂r
+
+
+def test_auto_picks_the_method_by_scene():
+    from moorjax.dynamics.settings import plan, resolve_solver
+    from moorjax.element import HermiteElement
+
+    scene = case_b_scene(n=4)
+    assert resolve_solver("auto", scene) == "ros34pw2"
+    assert resolve_solver("auto") == "kvaerno5"  # no scene to look at
+    hermite = eqx.tree_at(lambda s: s.lines[0].element, scene, HermiteElement())
+    assert resolve_solver("auto", hermite) == "kvaerno5"
+    assert resolve_solver("kvaerno3", scene) == "kvaerno3"
+    p = plan(1.0, scene=scene, solver="auto")
+    assert p.name == "ros34pw2" and isinstance(p.solver, RosenbrockW)
+    assert float(p.controller.rtol) == 1e-5
+    assert plan(1.0, scene=scene, solver="kvaerno5").name == "kvaerno5"
