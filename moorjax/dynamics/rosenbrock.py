@@ -71,7 +71,6 @@ from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import SecondOrderBandSolver, band_of
 
 
-
 class Tableau(eqx.Module):
     """A Rosenbrock(-W) method in Hairer & Wanner's form (A strictly lower, Γ lower
     triangular with the diagonal γ, weights b and embedded weights b̂), stored in the
@@ -92,15 +91,18 @@ class Tableau(eqx.Module):
         s = a.shape[0]
         big_g = g + gamma * np.eye(s)
         g_inv = np.linalg.inv(big_g)
-        rows = lambda m: tuple(tuple(float(x) for x in r) for r in m)  # noqa: E731
+        # entries that are zero in exact arithmetic come out of the inverse as
+        # ~1e-16: drop them (the step skips zero coefficients)
+        clean = lambda x: 0.0 if abs(x) < 1e-13 else float(x)  # noqa: E731
+        rows = lambda m: tuple(tuple(clean(x) for x in r) for r in m)  # noqa: E731
         return cls(
             gamma=float(gamma),
             a_t=rows(a @ g_inv),
             c_t=rows(np.diag(np.full(s, 1.0 / gamma)) - g_inv),
-            alpha=tuple(float(x) for x in a.sum(axis=1)),
-            gamma_sum=tuple(float(x) for x in big_g.sum(axis=1)),
-            m=tuple(float(x) for x in np.asarray(b) @ g_inv),
-            m_err=tuple(float(x) for x in (np.asarray(b) - np.asarray(b_hat)) @ g_inv),
+            alpha=tuple(clean(x) for x in a.sum(axis=1)),
+            gamma_sum=tuple(clean(x) for x in big_g.sum(axis=1)),
+            m=tuple(clean(x) for x in np.asarray(b) @ g_inv),
+            m_err=tuple(clean(x) for x in (np.asarray(b) - np.asarray(b_hat)) @ g_inv),
             order=int(order),
         )
 
@@ -266,9 +268,10 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
             if i == 0:
                 f_i = f0
             else:
-                y_i = _combine([(1.0, y0)] + [(tab.a_t[i][j], u[j]) for j in range(i)])
+                y_i = _combine([(1.0, y0)] + [(tab.a_t[i][j], u[j]) for j in range(i)])  # zeros skipped
                 f_i = terms.vf(t0 + tab.alpha[i] * h, y_i, args)
-            rhs = _combine([(1.0, f_i), (tab.gamma_sum[i] * h, f_t)]
+            ft_weight = tab.gamma_sum[i] * h if tab.gamma_sum[i] != 0.0 else 0.0
+            rhs = _combine([(1.0, f_i), (ft_weight, f_t)]
                            + [(tab.c_t[i][j] / h, u[j]) for j in range(i) if tab.c_t[i][j] != 0.0])
             u.append(self._solve(lu, jtu.tree_map(lambda x: c * x, rhs)))
         y1 = _combine([(1.0, y0)] + list(zip(tab.m, u)))
