@@ -38,9 +38,8 @@ Absent structure (no drag, no seabed, no current, no waves) is never traced.
 
 from __future__ import annotations
 
-import jax.numpy as jnp
-
 import jax
+import jax.numpy as jnp
 
 from .._numerics import abs_times, safe_unit
 from ..linalg import block_tridiagonal as btd
@@ -177,10 +176,10 @@ class LinearElement(AbstractElement):
         (their Jacobian is not block-tridiagonal)."""
         if not self.provides_stiff_band(line):
             return None
-        return stiff_band(self, line, env, t, q)
+        return stiff_band(line, env, t, q)
 
 
-def stiff_band(element, line, env, t, q):
+def stiff_band(line, env, t, q):
     """Block-tridiagonal W ≈ ∂[v, a]/∂[r, v] of a line's free nodes (rows, 6, 6 ×3).
 
     Exact for the terms that make a mooring line stiff, each differentiated by
@@ -227,27 +226,24 @@ def stiff_band(element, line, env, t, q):
     f_r_prev, f_v_prev = k_d, k_v  # ∂F_k/∂x_{k−1} = +K_{k−1} (k = 1..n)
 
     tangent, stretched = safe_unit(d)
+    surface = 0.0 if env.waves is None else env.waves.kinematics(r, t)[0]
+    wet = stretched * submerged_fraction(r[:, 2] - surface)  # as in _forces
     node_len = _node_lengths(line)
     if env.seabed is not None:
         f_r_self = f_r_self + columns(lambda x: _seabed(lt, env, x, v, node_len), r)
         f_v_self = f_v_self + columns(lambda x: _seabed(lt, env, r, x, node_len), v)
     if lt.drag is not None:
-        frac = submerged_fraction(r[:, 2])
-        if env.waves is not None:
-            frac = submerged_fraction(r[:, 2] - env.waves.kinematics(r, t)[0])
-        wet = stretched * frac
 
         def drag(u):
             return _to_nodes(_drag(lt, env, u[:-1], tangent, wet), _drag(lt, env, u[1:], tangent, wet))
 
         f_v_self = f_v_self + columns(drag, v)  # relative velocity: ∂u/∂v = I
 
-    mu = _segment_mass_tensors(line, env, tangent, stretched)
+    mu = _segment_mass_tensors(line, env, tangent, wet)  # added mass of the wet length
     m_inv = btd.inv3(0.5 * (mu[:-1] + mu[1:]))  # free nodes 1..n−1
 
     def rows(f_r, f_v):
-        a = jnp.concatenate([m_inv @ f_r, m_inv @ f_v], axis=-1)  # (n−1, 3, 6)
-        return a
+        return jnp.concatenate([m_inv @ f_r, m_inv @ f_v], axis=-1)  # (n−1, 3, 6)
 
     n_free = q.shape[0]
     top = jnp.zeros((n_free, 3, 6))
