@@ -68,7 +68,7 @@ from jax import lax
 from jax.flatten_util import ravel_pytree
 
 from ..linalg import block_tridiagonal as btd
-from ..linalg.banded_solver import SecondOrderBandSolver, band_of
+from ..linalg.banded_solver import SecondOrderBandSolver, _flatten, _unflatten, band_of
 
 
 class Tableau(eqx.Module):
@@ -207,11 +207,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         """W·v (same pytree as v)."""
         if self.structured:
             leaves, treedef = jtu.tree_flatten(v)
-            sizes = [x.shape[0] for x in leaves]
-            flat = jnp.concatenate([jnp.reshape(x, (x.shape[0], -1)) for x in leaves], axis=0)
-            out = btd.matvec(*jac, flat)
-            parts = jnp.split(out, list(np.cumsum(sizes)[:-1]), axis=0)
-            return jtu.tree_unflatten(treedef, [p.reshape(x.shape) for p, x in zip(parts, leaves)])
+            sizes = tuple(int(x.shape[0]) for x in leaves)
+            return _unflatten(btd.matvec(*jac, _flatten(v, sizes)), treedef, sizes)
         flat, unravel = ravel_pytree(v)
         return unravel(jac @ flat)
 
