@@ -82,6 +82,11 @@ def dynamics_options(d):
                    "them still (default: an example's own motion, else none)")
     d.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
+    d.add_argument("--wave-kinematics", metavar="FILE.py:NAME",
+                   help="external wave kinematics of a WaveKin = 1 deck (MoorDyn's API waves): a "
+                        "pure JAX function NAME(r, t) -> (velocity, acceleration) in FILE.py, r (..., 3) "
+                        "[m], both results (..., 3) [m/s, m/s^2]; without it such a deck's water is "
+                        "still")
     d.add_argument("--solver", default="kvaerno5", choices=("auto",) + SOLVERS,
                    help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) for "
                         "decks of lines with the linear element, kvaerno5 with bodies, Hermite "

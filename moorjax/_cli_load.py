@@ -30,6 +30,43 @@ def element_from(args):
     return {"linear": LinearElement(), "hermite": HermiteElement()}[name]
 
 
+def wave_kinematics_from(spec: str | None):
+    """The external wave kinematics named by ``--wave-kinematics FILE.py:NAME``:
+    ``NAME`` in the Python file is either a function ``f(r, t) -> (u, a)``
+    (wrapped in :class:`moorjax.model.ExternalWaves`) or an
+    :class:`moorjax.model.AbstractWaveKinematics`. None without the option."""
+    if spec is None:
+        return None
+    import importlib.util
+    from pathlib import Path
+
+    from .model import AbstractWaveKinematics, ExternalWaves
+
+    path, sep, name = spec.rpartition(":")
+    if not sep or not path or not name:
+        raise ValueError(f"--wave-kinematics {spec!r}: expected FILE.py:NAME, the Python file and the "
+                         "function f(r, t) -> (velocity, acceleration) in it")
+    file = Path(path)
+    if not file.is_file():
+        raise ValueError(f"--wave-kinematics {spec!r}: no such file {path!r}")
+    module_spec = importlib.util.spec_from_file_location(f"_moorjax_wave_kinematics_{file.stem}", file)
+    module = importlib.util.module_from_spec(module_spec)
+    try:
+        module_spec.loader.exec_module(module)
+    except Exception as exc:  # the user's file: say which and why
+        raise ValueError(f"--wave-kinematics {spec!r}: importing {path!r} failed: "
+                         f"{type(exc).__name__}: {exc}") from exc
+    obj = getattr(module, name, None)
+    if obj is None:
+        raise ValueError(f"--wave-kinematics {spec!r}: {path!r} defines no {name!r}")
+    if isinstance(obj, AbstractWaveKinematics):
+        return obj
+    if not callable(obj):
+        raise ValueError(f"--wave-kinematics {spec!r}: {name!r} is a {type(obj).__name__}, not a function "
+                         "f(r, t) -> (velocity, acceleration) or a moorjax.model.AbstractWaveKinematics")
+    return ExternalWaves(obj)
+
+
 def load(args, motion=None):
     """Deck, scene and motion of a sub-command: ``motion`` is the motion file
     to read (None: coupled points and bodies held where the deck puts them)."""
@@ -37,7 +74,9 @@ def load(args, motion=None):
 
     deck = read_deck(deck_path(args.deck))
     table = None if motion is None else read_deck_motion(motion, deck)
-    scene = build_scene(deck, segments=args.segments, motion=table, element=element_from(args))
+    waves = wave_kinematics_from(getattr(args, "wave_kinematics", None))
+    scene = build_scene(deck, segments=args.segments, motion=table, element=element_from(args),
+                        waves=waves)
     return deck, scene, table
 
 

@@ -353,7 +353,7 @@ ERROR_CASES = {
     "option negative kbot": ({39: "-3e6  kBot"}, 39, ["kBot = -3e6 Pa/m", ">= 0"]),
     "option zero depth": ({38: "0  WtrDpth"}, 38, ["WtrDpth = 0 m", "> 0"]),
     "option zero dtM": ({34: "0  dtM"}, 34, ["dtM = 0 s", "> 0"]),
-    "option waves": ({33: ["0 writeLog", "1 WaveKin"]}, 34, ["WaveKin = 1", "not supported"]),
+    "option waves": ({33: ["0 writeLog", "5 WaveKin"]}, 34, ["WaveKin = 5", "not implemented in MoorDyn"]),
     "option seafloor file": ({33: ["0 writeLog", "bathy.txt SeafloorFile"]}, 34, ["'bathy.txt'", "no such file next to the deck"]),
     # structure
     "bodies row, unknown kind": (

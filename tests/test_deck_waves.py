@@ -203,7 +203,6 @@ def _deck(tmp_path, wavekin, files):
 
 
 @pytest.mark.parametrize("mode, msg", [
-    (1, "externally driven waves .*MoorDyn_ExternalWaveKinSet"),
     (4, "not implemented in MoorDyn v2 either"),
     (9, "not a MoorDyn wave mode"),
 ])

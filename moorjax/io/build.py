@@ -36,6 +36,12 @@ MoorDyn conventions kept (so a deck means the same in both codes):
   at the line nodes (drag on the velocity relative to current plus waves, and
   the water's acceleration) and free points (drag, as MoorDyn's Point, which
   leaves out the water's acceleration).
+- ``WaveKin = 1`` (MoorDyn's external kinematics, set through its API at run
+  time): the ``waves`` argument of :func:`build_scene`, e.g. an
+  :class:`~moorjax.model.ExternalWaves` of the user's function (the CLI's
+  ``--wave-kinematics FILE.py:NAME``). Without one the water is still, as in
+  MoorDyn before its first ``MoorDyn_ExternalWaveKinSet``, and an
+  :class:`InputWarning` says so.
 
 - ``SeafloorFile``: the bathymetry grid becomes the seabed's
   :class:`Bathymetry` (contact along the local seabed normal); the
@@ -54,6 +60,7 @@ import numpy as np
 from ..body.point import ConnectionPoint
 from ..body.submerged import SubmergedBody
 from ..model import (
+    AbstractWaveKinematics,
     AddedMass,
     AiryWaves,
     Bathymetry,
@@ -146,7 +153,8 @@ def body_reference_end(deck: Deck, body_id: int, motion: Motion | None = None):
     return FixedEnd(body.position)
 
 
-def build_scene(deck: Deck, segments: int | None = None, motion=None, element=None) -> Scene:
+def build_scene(deck: Deck, segments: int | None = None, motion=None, element=None,
+                waves=None) -> Scene:
     """A :class:`Scene` from a deck.
 
     Args:
@@ -155,10 +163,16 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
         motion: optional :class:`moorjax.io.Motion` driving coupled points and
             coupled bodies (read it with :func:`read_deck_motion`).
         element: the discretisation of every line (default: ``LinearElement()``).
+        waves: the water's kinematics of a ``WaveKin = 1`` deck (MoorDyn's
+            external waves), an :class:`~moorjax.model.AbstractWaveKinematics`
+            such as ``ExternalWaves(f)``; without it such a deck's water is
+            still (with a warning). Decks with other ``WaveKin`` values take
+            their waves from their files and refuse this argument.
 
     Raises:
-        InputError: bad ``segments``, no water depth, or a body kind that cannot
-            be built (``coupledpinned``).
+        InputError: bad ``segments``, no water depth, a body kind that cannot
+            be built (``coupledpinned``), or ``waves`` for a deck whose
+            ``WaveKin`` is not 1.
     """
     if segments is not None and (int(segments) != segments or segments < 1):
         raise InputError(f"--segments = {segments} must be an integer >= 1")
@@ -231,7 +245,7 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             bathymetry = Bathymetry(sf.x, sf.y, sf.z)
         seabed = Seabed(float(opts["kBot"]), float(opts["cBot"]), friction, bathymetry)
     env = Environment(depth, rho, g, seabed=seabed, current=deck_current(deck),
-                      waves=deck_waves(deck, float(opts["WtrDpth"]) or depth, g))
+                      waves=_scene_waves(deck, waves, float(opts["WtrDpth"]) or depth, g))
     points = [_free_point(deck, deck.points[i], lines, rho, g, env.current) for i in free_ids]
     bodies = [_free_body(deck, deck.bodies[i], lines, rho, g, env.current) for i in free_bodies]
     return Scene(lines, env, bodies=points + bodies)
@@ -351,6 +365,32 @@ def deck_current(deck: Deck):
     if cur.mode == 5:
         return GridCurrent(cur.x, cur.y, cur.z, cur.t, cur.velocity)
     return TimeProfileCurrent(cur.t, cur.z, cur.velocity)
+
+
+def _scene_waves(deck: Deck, waves, depth: float, g: float):
+    """The environment's waves: the deck's own (``WaveKin`` 2, 3, 7), or for
+    ``WaveKin = 1`` the external kinematics given to :func:`build_scene`."""
+    mode = int(float(options_with_defaults(deck)["WaveKin"]))
+    where = f"{deck.path}: OPTIONS: WaveKin = {mode}"
+    if waves is not None:
+        if mode != 1:
+            raise InputError(
+                f"{where}: external wave kinematics (--wave-kinematics, build_scene's waves) are "
+                "MoorDyn's WaveKin = 1; this deck has its own wave setting, so set WaveKin to 1 in the "
+                "deck to drive it from a function")
+        if not isinstance(waves, AbstractWaveKinematics):
+            raise InputError(f"build_scene: waves must be an AbstractWaveKinematics (e.g. "
+                             f"moorjax.model.ExternalWaves(f)), got {type(waves).__name__}")
+        return waves
+    if mode == 1:
+        warnings.warn(
+            f"{where}: the wave kinematics are external (MoorDyn sets them through its API at run "
+            "time) and none were given, so the water is still, as in MoorDyn before the first "
+            "MoorDyn_ExternalWaveKinSet; give them with --wave-kinematics FILE.py:FUNCTION or "
+            "build_scene(..., waves=moorjax.model.ExternalWaves(f))",
+            InputWarning, stacklevel=3)
+        return None
+    return deck_waves(deck, depth, g)
 
 
 def deck_waves(deck: Deck, depth: float, g: float):

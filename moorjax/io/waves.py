@@ -28,8 +28,10 @@ names, and the semantics below follow its sources ``source/Waves.cpp``,
   kinematics on that (x, y, z, t) grid and interpolates linearly in it; moorjax
   sums the same components at the nodes directly (the differences are MoorDyn's
   interpolation errors, O(Δ²)). The grid is checked to exist and be readable.
-* ``WaveKin = 1`` (external kinematics set through MoorDyn's API) and 4, 5, 6
-  (not implemented in MoorDyn) are refused.
+* ``WaveKin = 1`` (external kinematics set through MoorDyn's API) has no file:
+  the kinematics come at run time (:class:`moorjax.model.ExternalWaves`,
+  ``build_scene(..., waves=...)``, ``--wave-kinematics``). 4, 5, 6 (not
+  implemented in MoorDyn) are refused.
 
 Components of zero amplitude are dropped (they add nothing). Pure Python +
 numpy; no JAX.

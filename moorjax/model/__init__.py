@@ -30,7 +30,9 @@ from .line_type import AddedMass as AddedMass
 from .line_type import LineType as LineType
 from .line_type import MorisonDrag as MorisonDrag
 from .scene import Scene as Scene
+from .waves import AbstractWaveKinematics as AbstractWaveKinematics
 from .waves import AiryWaves as AiryWaves
+from .waves import ExternalWaves as ExternalWaves
 from .waves import GridAiryWaves as GridAiryWaves
 from .waves import IrregularWave as IrregularWave
 from .waves import wave_number as wave_number
@@ -41,10 +43,12 @@ __all__ = [
     'AbstractCurrent',
     'AbstractDepthCurrent',
     'AbstractEnd',
+    'AbstractWaveKinematics',
     'AddedMass',
     'AiryWaves',
     'Bilateral',
     'Environment',
+    'ExternalWaves',
     'Bathymetry',
     'BodyEnd',
     'ClampedEnd',

@@ -14,7 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._checks import check_finite, check_nonnegative, check_positive
-from .waves import AiryWaves
+from .waves import AbstractWaveKinematics
 
 
 class SeabedFriction(eqx.Module):
@@ -330,7 +330,9 @@ class Environment(eqx.Module):
     """Water depth [m], density ρ [kg/m³] (≥ 0; 0 is air), gravity g [m/s²]
     (≥ 0), optional seabed, current and waves.
 
-    ``waves`` (:class:`moorjax.model.waves.AiryWaves`) adds the wave particle
+    ``waves`` (an :class:`moorjax.model.waves.AbstractWaveKinematics`: wave
+    components as :class:`~moorjax.model.waves.AiryWaves`, or a user's function
+    as :class:`~moorjax.model.waves.ExternalWaves`) adds the wave particle
     velocity to the current in the line drag and loads the lines with the
     water's acceleration (Froude–Krylov and added-mass parts). Statics solve
     the mean state without them (:meth:`without_waves`), as MoorDyn's initial
@@ -342,17 +344,18 @@ class Environment(eqx.Module):
     g: Array
     seabed: Seabed | None
     current: AbstractCurrent | None
-    waves: AiryWaves | None = None
+    waves: AbstractWaveKinematics | None = None
 
     def __init__(self, depth, rho=1025.0, g=9.80665, seabed: Seabed | None = None,
-                 current: AbstractCurrent | None = None, waves: AiryWaves | None = None):
+                 current: AbstractCurrent | None = None, waves: AbstractWaveKinematics | None = None):
         check_positive(depth, "water depth", "m")
         # zero is allowed, as in MoorDyn: rho = 0 is a line in air (no buoyancy,
         # drag or added mass), g = 0 a weightless system
         check_nonnegative(rho, "water density", "kg/m³")
         check_nonnegative(g, "gravity", "m/s²")
-        if waves is not None and not isinstance(waves, AiryWaves):
-            raise ValueError(f"waves must be an AiryWaves (moorjax.model.waves), got {type(waves).__name__}")
+        if waves is not None and not isinstance(waves, AbstractWaveKinematics):
+            raise ValueError("waves must be an AbstractWaveKinematics (moorjax.model.waves: AiryWaves, "
+                             f"ExternalWaves), got {type(waves).__name__}")
         self.depth = jnp.asarray(depth, dtype=float)
         self.rho = jnp.asarray(rho, dtype=float)
         self.g = jnp.asarray(g, dtype=float)

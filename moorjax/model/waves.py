@@ -25,8 +25,11 @@ surface (Wheeler stretching): the kinematics at z are those of linear theory at
 z' = h(z + h)/(η + h) − h, so the surface z = η maps to z' = 0 and the seabed
 stays at −h; above the surface z' is held at 0 (MoorDyn: "If the point is above
 the water surface, return the values at the water surface"). A node above the
-surface thus sees the surface's kinematics; moorjax keeps every node
-submerged (no partial submergence, unlike MoorDyn's ``calcSubSeg``).
+surface thus sees the surface's kinematics; the linear element is wet only
+below the surface, as MoorDyn's ``calcSubSeg`` (:mod:`moorjax.element.linear`).
+
+:class:`AbstractWaveKinematics` is what the physics samples; :class:`ExternalWaves`
+takes the kinematics from a user's function instead (MoorDyn's ``WaveKin = 1``).
 
 The hyperbolic ratios are evaluated as (e^{kz'} ± e^{−k(z'+2h)})/(1 − e^{−2kh}),
 exact at every depth and never overflowing (MoorDyn switches to the deep-water
@@ -35,6 +38,9 @@ wave numbers are solved once, at construction.
 """
 
 from __future__ import annotations
+
+import abc
+from typing import Callable
 
 import equinox as eqx
 import jax
@@ -115,7 +121,80 @@ def wave_number(omega, depth, g=9.80665) -> Array:
     return newton(jax.lax.stop_gradient(x), c) / depth
 
 
-class AiryWaves(eqx.Module):
+class AbstractWaveKinematics(eqx.Module):
+    """The water's motion under a free surface, as the lines, points and bodies
+    sample it: the surface elevation above a point, the water velocity and
+    acceleration at it (:meth:`kinematics`), and the height at which the
+    current is read there (:meth:`current_height`).
+
+    :class:`AiryWaves` (wave components) and :class:`ExternalWaves` (a user's
+    function: MoorDyn's ``WaveKin = 1``) implement it; subclass it for any other
+    field (its array fields are then differentiable parameters).
+    """
+
+    @abc.abstractmethod
+    def kinematics(self, r, t) -> tuple[Array, Array, Array]:
+        """(η (…) [m], u (…, 3) [m/s], a (…, 3) [m/s²]) at positions r (…, 3) [m], time t [s]."""
+
+    def current_height(self, r, eta) -> Array:
+        """The height [m] at which the current is sampled at the points r (…, 3):
+        their own (MoorDyn's ``WaveKin = 7`` adds the current at the node)."""
+        del eta
+        return r[..., 2]
+
+
+class ExternalWaves(AbstractWaveKinematics):
+    """Water kinematics from a user's function: MoorDyn's ``WaveKin = 1``.
+
+    MoorDyn's external wave kinematics are set through its API at run time
+    (``MoorDyn_ExternalWaveKinGetCoordinates`` gives the node positions,
+    ``MoorDyn_ExternalWaveKinSet`` their velocity and acceleration, held until
+    the next call; the surface elevation is not set and stays 0). moorjax takes
+    the function itself and evaluates it at every node, point and body reference
+    point at every stage of the solver, so there is no sample-and-hold.
+
+    Args:
+        velocity_acceleration: ``f(r, t) -> (u, a)``, with r (…, 3) positions
+            [m], t a time [s], u and a (…, 3) the water velocity [m/s] and
+            acceleration [m/s²]. It must be a pure JAX function (it is traced and
+            differentiated); a current given separately
+            (:class:`~moorjax.model.environment.Environment`'s ``current``) is
+            added to u, as MoorDyn adds its current to external waves.
+        elevation: optional ``g(x, y, t) -> η`` [m], the free surface above
+            (x, y) (…); default: the still-water level 0, as MoorDyn's.
+
+    A plain function is kept as static structure (a new function object
+    recompiles); to differentiate with respect to the field's parameters,
+    subclass :class:`AbstractWaveKinematics` with them as array fields.
+    """
+
+    velocity_acceleration: Callable = eqx.field(static=True)
+    elevation: Callable | None = eqx.field(static=True, default=None)
+
+    def __init__(self, velocity_acceleration: Callable, elevation: Callable | None = None):
+        if not callable(velocity_acceleration):
+            raise ValueError("ExternalWaves needs a function f(r, t) -> (velocity, acceleration), got "
+                             f"{type(velocity_acceleration).__name__}")
+        if elevation is not None and not callable(elevation):
+            raise ValueError(f"ExternalWaves: elevation must be a function g(x, y, t) -> η or None, got "
+                             f"{type(elevation).__name__}")
+        self.velocity_acceleration = velocity_acceleration
+        self.elevation = elevation
+
+    def kinematics(self, r, t):
+        r = jnp.asarray(r, dtype=float)
+        u, a = self.velocity_acceleration(r, t)
+        u = jnp.broadcast_to(jnp.asarray(u, dtype=float), r.shape)
+        a = jnp.broadcast_to(jnp.asarray(a, dtype=float), r.shape)
+        if self.elevation is None:
+            eta = jnp.zeros(r.shape[:-1])
+        else:
+            eta = jnp.broadcast_to(jnp.asarray(self.elevation(r[..., 0], r[..., 1], t), dtype=float),
+                                   r.shape[:-1])
+        return eta, u, a
+
+
+class AiryWaves(AbstractWaveKinematics):
     """Linear wave kinematics of finite depth under a set of components.
 
     Fields: ``wave`` (the :class:`IrregularWave`), ``depth`` h [m], ``k`` (n,)
@@ -170,12 +249,6 @@ class AiryWaves(eqx.Module):
         under the surface η (…): h(z + h)/(η + h) − h, held at 0 above the surface."""
         h = self.depth
         return jnp.minimum(h * (r[..., 2] + h) / (eta + h) - h, 0.0)
-
-    def current_height(self, r, eta) -> Array:
-        """The height [m] at which the current is sampled at the points r (…, 3):
-        their own (MoorDyn's ``WaveKin = 7`` adds the current at the node)."""
-        del eta
-        return r[..., 2]
 
     def kinematics(self, r, t) -> tuple[Array, Array, Array]:
         """Elevation above each point, water velocity and acceleration.

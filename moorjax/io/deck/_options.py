@@ -149,16 +149,13 @@ def _check_currents_mode(ctx: Context, lineno: int, name: str, token: str, value
 
 def _check_wave_mode(ctx: Context, lineno: int, name: str, token: str, value: float) -> None:
     """``WaveKin``: 0 none, 2 (FFT grid), 3 (elevation grid) and 7 (component sum)
-    are read (:mod:`moorjax.io.waves`); 1 needs MoorDyn's external-kinematics API;
+    are read (:mod:`moorjax.io.waves`); 1 (external kinematics, MoorDyn's API) is
+    supplied at run time (:class:`moorjax.model.ExternalWaves`, ``--wave-kinematics``);
     4, 5 and 6 are not implemented in MoorDyn either."""
-    if value in (0, 2, 3, 7):
+    if value in (0, 1, 2, 3, 7):
         return
-    expected = ("expected 0 (none), 2 (wave_frequencies.txt on a grid), 3 (wave_elevation.txt on a "
-                "grid) or 7 (wave_frequencies.txt summed at the nodes)")
-    if value == 1:
-        raise ctx.error(lineno, f"OPTIONS: {name} = {token}: externally driven waves (set through "
-                        "MoorDyn's API at run time, MoorDyn_ExternalWaveKinSet) are not supported; give "
-                        f"the sea as wave components instead: {expected}")
+    expected = ("expected 0 (none), 1 (external, supplied at run time), 2 (wave_frequencies.txt on a "
+                "grid), 3 (wave_elevation.txt on a grid) or 7 (wave_frequencies.txt summed at the nodes)")
     if value in (4, 5, 6):
         raise ctx.error(lineno, f"OPTIONS: {name} = {token}: wave mode {int(value)} is not implemented "
                         f"in MoorDyn v2 either; {expected}")

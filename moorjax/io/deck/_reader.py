@@ -122,7 +122,7 @@ def _read_waves(ctx: Context, options: dict[str, float | str], option_lines: dic
     """The wave components of ``WaveKin`` 2, 3 or 7, from the files MoorDyn-C reads
     from the deck's folder (:mod:`moorjax.io.waves`)."""
     mode = int(options.get("WaveKin", 0))
-    if not mode:
+    if mode in (0, 1):  # 1: external kinematics, given at run time (build_scene's waves)
         return None
     origin = f"{ctx.path}:{option_lines['WaveKin']}: OPTIONS: WaveKin = {mode}"
     return read_deck_waves(Path(ctx.path).parent, mode, float(options.get("dtWave", 0.25)), origin)
