@@ -184,7 +184,7 @@ def cmd_simulate(args) -> int:
              f"{args.duration:g} s; compiling (tens of seconds the first time)…")
     t_start = time.perf_counter()
     with _CompileTimer() as timer, prog.meter(args.t0, args.duration):
-        res = simulate(scene, args.duration, save_nodes=not args.no_nodes,
+        res = simulate(scene, args.duration, save_nodes=not args.no_nodes, init=args.initial,
                        progress=prog.on, **kwargs)
         jax.block_until_ready(res.tension_b)
     wall = time.perf_counter() - t_start
@@ -192,7 +192,7 @@ def cmd_simulate(args) -> int:
     prog.say(f"{args.duration:g} s simulated in {wall:.1f} s: {int(res.num_steps)} steps "
              f"({int(res.num_rejected_steps)} rejected)")
     settings = dict(kwargs, duration=args.duration, segments=args.segments,
-                    save_nodes=not args.no_nodes)
+                    save_nodes=not args.no_nodes, initial=args.initial)
     ds = to_dataset(res, scene, deck=deck, motion=motion, attrs=dict(
         deck=args.deck, deck_text=deck_text(args.deck), motion=motion_path(args) or "none",
         settings=settings, history=command_line(args),
@@ -254,6 +254,11 @@ def build_parser() -> argparse.ArgumentParser:
                         "tensions, units) or .csv (tensions and forces)")
     d.add_argument("--no-nodes", action="store_true",
                    help="leave node positions and segment tensions out (huge runs)")
+    d.add_argument("--initial", choices=("statics", "catenary"), default="statics",
+                   help="start: statics, the static equilibrium of lines, points and bodies at "
+                        "--t0; catenary, MoorDyn's start with TmaxIC = 0: each line's own static "
+                        "shape with the points and bodies where the deck puts them, at rest and "
+                        "not balanced (a line whose solve fails starts straight)")
     d.add_argument("--stats", action="store_true",
                    help="print one JSON line of statistics to stderr (compile and run time "
                         "measured in the same run)")

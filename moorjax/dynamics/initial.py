@@ -81,6 +81,37 @@ def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
                              int(max_iterations))
 
 
+def catenary_state(scene, t0=0.0) -> Equilibrium:
+    """MoorDyn's "catenary solver alone" start (its ``TmaxIC = 0``): each line's
+    own static shape with its ends where the scene puts them at t0 — free points
+    and bodies held at η = 0, where the deck places them — everything at rest.
+
+    MoorDyn's ``docs/initialization.rst``: the catenary solver is always applied
+    first, and a line it cannot solve starts as a straight line; with
+    ``TmaxIC = 0`` nothing else runs. Here each line's discrete static solve
+    (:func:`~moorjax.statics.fem.solve_line_statics`) plays the catenary's part
+    and a line whose solve does not converge starts straight between its ends
+    (``lines_converged`` says which). The points and bodies are not balanced: the
+    run starts out of equilibrium wherever the deck's positions are, as MoorDyn's
+    does. ``converged`` is ``lines_converged.all()``.
+    """
+    check_geometry(scene, t0)
+    zero = [jnp.zeros(6)] * len(scene.bodies)
+    lines = attach(scene.lines, scene.bodies, zero, zero) if scene.bodies else scene.lines
+    states, oks = [], []
+    for line in lines:
+        st = solve_line_statics(line, scene.env, t0, throw=False)
+        state, straight, ok = st.state(), line.straight_state(t0), st.converged
+        if jax.tree_util.tree_structure(state) == jax.tree_util.tree_structure(straight):
+            state = jax.tree_util.tree_map(lambda a, b: jnp.where(ok, a, b), state, straight)
+        states.append(state)  # (a Hermite line keeps where its solve stopped)
+        oks.append(ok)
+    ok = jnp.stack(oks)
+    bodies = tuple(b.rest_state() for b in scene.bodies)
+    return Equilibrium(tuple(states) + bodies, ok, jnp.all(ok),
+                       jnp.zeros((len(scene.bodies), 6)) if scene.bodies else None)
+
+
 def _line_statics_at(scene, poses, t, inits):
     """Each line's static solve with its fairleads where ``poses`` put them."""
     zero = [jnp.zeros(6)] * len(scene.bodies)
@@ -197,7 +228,9 @@ def not_converged_message(scene, eq: Equilibrium) -> str:
                 "or left a force imbalance); check the geometry (can the line reach its ends?), "
                 "or give `init`")
     return ("the bodies' static equilibrium did not converge (force imbalance left after the "
-            "Newton iterations); check the bodies' loads and lines, or give `init`")
+            "Newton iterations); check the bodies' loads and lines, give `init`, or start as "
+            "MoorDyn does with TmaxIC = 0, from each line's own static shape with the points and "
+            "bodies where the scene puts them: init='catenary' (command line: --initial catenary)")
 
 
 def initial_state(scene, t0=0.0) -> tuple:

@@ -16,14 +16,16 @@ terms, solver) does.
 from __future__ import annotations
 
 import time as _time
+import warnings
 from typing import Any
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .initial import initial_state as initial_state
-from .initial import equilibrium_state, not_converged_message
+from .initial import catenary_state, equilibrium_state, not_converged_message
 from .integrate import SimulationResult as SimulationResult
 from .._cache import StoredProgram
 from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
@@ -74,7 +76,12 @@ def simulate(
         init: tuple of :class:`LineState` (default: static equilibrium at t0,
             :func:`~moorjax.dynamics.initial.equilibrium_state`; ``RuntimeError``
             if it does not converge), followed by each body's 1-D state
-            (default: at rest at η = 0 when only line states are given).
+            (default: at rest at η = 0 when only line states are given); or a
+            name: ``"statics"`` (the default) or ``"catenary"``, MoorDyn's start
+            with ``TmaxIC = 0`` (:func:`~moorjax.dynamics.initial.catenary_state`:
+            each line's own static shape, points and bodies where the scene puts
+            them, not balanced; lines whose solve fails start straight, with a
+            warning).
         solver: a name from :data:`moorjax.dynamics.SOLVERS` (default
             Kvaerno5; ``"auto"``: ROS34PW2, the Rosenbrock-W method, for scenes
             of lines with the linear element, else Kvaerno5, see
@@ -117,6 +124,8 @@ def simulate(
         save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
         progress=progress, scene=scene, retry_failed_steps=retry_failed_steps,
     )
+    if isinstance(init, str):
+        init = _named_start(scene, init, t0)
     if init is None:
         eq = equilibrium_state(scene, t0)
         if not isinstance(eq.converged, jax.core.Tracer) and not bool(eq.converged):
@@ -156,3 +165,23 @@ def timed_simulate(scene, duration, **kwargs):
     jax.block_until_ready(res.tension_b)
     t_c = _time.perf_counter()
     return res, t_b - t_a, t_c - t_b
+
+
+INITIAL = ("statics", "catenary")
+
+
+def _named_start(scene, name, t0):
+    """``simulate``'s ``init`` given by name (:data:`INITIAL`)."""
+    if name == "statics":
+        return None
+    if name != "catenary":
+        raise ValueError(f"init = {name!r}: expected a tuple of states or one of {INITIAL}")
+    eq = catenary_state(scene, t0)
+    if not isinstance(eq.converged, jax.core.Tracer) and not bool(eq.converged):
+        bad = [scene.lines[i].label for i, ok in enumerate(np.asarray(eq.lines_converged)) if not ok]
+        warnings.warn(f"init='catenary': the static solve of line(s) {', '.join(bad)} with the points "
+                      "and bodies where the scene puts them did not converge; they start straight "
+                      "between their ends, as MoorDyn's lines do when its catenary fails",
+                      RuntimeWarning, stacklevel=3)
+    return eq.state
+
