@@ -67,7 +67,9 @@ def cmd_statics(args) -> int:
             raise RuntimeError(
                 "system statics (free points and bodies with their lines) did not converge: "
                 f"force imbalance {float(np.max(np.abs(np.asarray(system.residual)))):.3g} N "
-                f"after {system.iterations} Newton iterations")
+                f"after {system.iterations} Newton iterations; a run can still start as MoorDyn's "
+                "does with TmaxIC = 0, from each line's own static shape with the points and bodies "
+                "where the deck puts them: moorjax simulate DECK --initial catenary")
         statics = system.lines
         methods = list(system.methods)
     else:
