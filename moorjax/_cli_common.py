@@ -87,10 +87,10 @@ def dynamics_options(d):
                         "pure JAX function NAME(r, t) -> (velocity, acceleration) in FILE.py, r (..., 3) "
                         "[m], both results (..., 3) [m/s, m/s^2]; without it such a deck's water is "
                         "still")
-    d.add_argument("--solver", default="kvaerno5", choices=("auto",) + SOLVERS,
-                   help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) for "
-                        "decks of lines with the linear element, kvaerno5 with bodies, Hermite "
-                        "lines or bending stiffness")
+    d.add_argument("--solver", default="auto", choices=("auto",) + SOLVERS,
+                   help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) at a "
+                        "tenth of --rtol/--atol for decks of lines with the linear element, "
+                        "kvaerno5 with bodies, Hermite lines or bending stiffness")
     element_option(d)
     d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
     d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")

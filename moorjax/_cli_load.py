@@ -88,10 +88,13 @@ def dynamics_settings(args) -> dict:
 
 def resolved_settings(kwargs, scene) -> dict:
     """simulate() keyword arguments with ``solver="auto"`` replaced by the method
-    the run uses for ``scene`` (recorded in output files and ``--stats``)."""
-    from .dynamics.settings import resolve_solver
+    the run uses for ``scene`` and the tolerances it runs at (recorded in output
+    files and ``--stats``: passed again, they reproduce the run)."""
+    from .dynamics.settings import resolve_tolerances
 
-    return dict(kwargs, solver=resolve_solver(kwargs["solver"], scene))
+    solver, rtol, atol, atol_velocity = resolve_tolerances(
+        kwargs["solver"], kwargs["rtol"], kwargs["atol"], kwargs["atol_velocity"], scene)
+    return dict(kwargs, solver=solver, rtol=rtol, atol=atol, atol_velocity=atol_velocity)
 
 
 def load_for_dynamics(args, with_motion=False):

@@ -212,6 +212,8 @@ def cmd_simulate(args) -> int:
             accepted_steps=int(res.num_accepted_steps),
             solver=kwargs["solver"],
             solver_requested=args.solver,
+            rtol=kwargs["rtol"],
+            atol=kwargs["atol"],
         )
         print(json.dumps(stats), file=sys.stderr)
     return 0

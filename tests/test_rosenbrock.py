@@ -204,7 +204,13 @@ def test_auto_picks_the_method_by_scene():
     hermite = eqx.tree_at(lambda s: s.lines[0].element, scene, HermiteElement())
     assert resolve_solver("auto", hermite) == "kvaerno5"
     assert resolve_solver("kvaerno3", scene) == "kvaerno3"
-    p = plan(1.0, scene=scene, solver="auto")
+    p = plan(1.0, scene=scene, solver="auto")  # auto is the default
     assert p.name == "ros34pw2" and isinstance(p.solver, RosenbrockW)
-    assert float(p.controller.rtol) == 1e-5
-    assert plan(1.0, scene=scene, solver="kvaerno5").name == "kvaerno5"
+    assert plan(1.0, scene=scene).name == "ros34pw2"
+    # at a tenth of the tolerances (its error estimate is less conservative)
+    assert float(p.controller.rtol) == pytest.approx(1e-6) and float(p.controller.atol) == pytest.approx(1e-5)
+    p = plan(1.0, scene=scene, solver="ros34pw2")  # named: the tolerances as given
+    assert float(p.controller.rtol) == 1e-5 and float(p.controller.atol) == 1e-4
+    k = plan(1.0, scene=scene, solver="kvaerno5")
+    assert k.name == "kvaerno5" and float(k.controller.rtol) == 1e-5
+    assert plan(1.0, scene=hermite).name == "kvaerno5"

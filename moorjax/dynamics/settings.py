@@ -74,11 +74,38 @@ Plan = Settings
 #: (bodies, Hermite or bending lines)
 AUTO_FALLBACK = "kvaerno5"
 
+#: ``solver="auto"`` runs ROS34PW2 at this fraction of the given tolerances.
+#: Its error estimate (an order-2 embedded solution) is less conservative than
+#: Kvaerno5's (order 4), so at equal nominal tolerances it is less accurate:
+#: at (1e-5, 1e-4) a stiff chain swinging into a current (tests/test_deck_currents.py)
+#: is 2.5 % off MoorDyn's fairlead tension at t = 1 s (Kvaerno5: 0.13 %), and the
+#: 45 s wave run of MoorDyn's wavekin_3.txt 0.29 of the tension's std (Kvaerno5:
+#: 0.05). At a tenth: 0.16 % and 0.038, and on the reference cases (20 s, error
+#: against the N = 160 references) A, N = 40: 0.79 % at 7.6 ms per simulated s
+#: (Kvaerno5 at the full tolerances: 0.84 % at 14.0), B, N = 10: 0.66 % at 3.6
+#: (Kvaerno5: 0.67 % at 3.9). See benchmarks/README.md, "Issue 17, session 10".
+AUTO_ROS_TOLERANCE = 0.1
+
+
+def resolve_tolerances(solver, rtol, atol, atol_velocity=None, scene=None):
+    """``(solver, rtol, atol, atol_velocity)`` with ``"auto"`` resolved
+    (:func:`resolve_solver`) and, where it resolves to ROS34PW2, the tolerances
+    scaled by :data:`AUTO_ROS_TOLERANCE` (``atol_velocity`` defaulting to
+    100·atol first). Any other solver comes back with the tolerances as given:
+    the resolved settings, passed again, reproduce the run."""
+    name = resolve_solver(solver, scene)
+    if name is solver or name != "ros34pw2":
+        return name, rtol, atol, atol_velocity
+    if atol_velocity is None:
+        atol_velocity = 100.0 * float(atol)
+    k = AUTO_ROS_TOLERANCE
+    return name, k * float(rtol), k * float(atol), k * float(atol_velocity)
+
 
 def resolve_solver(solver, scene=None):
     """The method name ``"auto"`` stands for: ``"ros34pw2"`` (the Rosenbrock-W
-    method, 2–4× cheaper than Kvaerno5 at the same tolerances and error on the
-    reference cases)
+    method; :func:`resolve_tolerances` runs it at a tenth of the tolerances,
+    where it is as accurate as Kvaerno5 and 1–2× cheaper on the reference cases)
     when every line provides a structured Jacobian approximation (linear element,
     nodal mass, no bending) and there are no bodies, else ``"kvaerno5"``; other
     names and solver objects are returned as they are."""
@@ -103,7 +130,7 @@ def plan(
     ts=None,
     dt_out: float = 0.05,
     t0: float = 0.0,
-    solver: str | Any = "kvaerno5",
+    solver: str | Any = "auto",
     rtol: float = 1e-5,
     atol: float = 1e-4,
     atol_velocity: float | None = None,
@@ -122,8 +149,8 @@ def plan(
     """Check the settings of :func:`~moorjax.dynamics.simulate` (same arguments)
     and build the solver.
 
-    ``solver="auto"`` resolves with :func:`resolve_solver` (without ``scene``:
-    Kvaerno5). Raises ``ValueError`` naming the offending setting. With ``scene``, a
+    ``solver="auto"`` (the default) resolves with :func:`resolve_tolerances`
+    (without ``scene``: Kvaerno5; ROS34PW2 runs at a tenth of the tolerances). Raises ``ValueError`` naming the offending setting. With ``scene``, a
     structured linear solver is replaced by the dense one when some line's
     element does not have a block-tridiagonal Jacobian (consistent mass), and
     the run is checked against the time spans of the scene's motions.
@@ -138,7 +165,10 @@ def plan(
             steps are exactly ``dt``.
     """
     check_adjoint(adjoint)
-    solver = resolve_solver(solver, scene)
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if not np.isfinite(float(tol)):
+            raise ValueError(f"{name} = {tol} must be finite")
+    solver, rtol, atol, atol_velocity = resolve_tolerances(solver, rtol, atol, atol_velocity, scene)
     if scene is not None and linear_solver in ("reduced", "block") and not banded_jacobian(scene):
         linear_solver = "dense"
     if (scene is not None and scene.bodies and isinstance(solver, str)

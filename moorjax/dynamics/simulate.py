@@ -47,7 +47,7 @@ def simulate(
     dt_out: float = 0.05,
     t0: float = 0.0,
     init=None,
-    solver: str | Any = "kvaerno5",
+    solver: str | Any = "auto",
     rtol: float = 1e-5,
     atol: float = 1e-4,
     atol_velocity: float | None = None,
@@ -82,10 +82,11 @@ def simulate(
             each line's own static shape, points and bodies where the scene puts
             them, not balanced; lines whose solve fails start straight, with a
             warning).
-        solver: a name from :data:`moorjax.dynamics.SOLVERS` (default
-            Kvaerno5; ``"auto"``: ROS34PW2, the Rosenbrock-W method, for scenes
-            of lines with the linear element, else Kvaerno5, see
-            :func:`~moorjax.dynamics.settings.resolve_solver`) or a diffrax solver.
+        solver: ``"auto"`` (default): ROS34PW2, the Rosenbrock-W method, at a
+            tenth of ``rtol``, ``atol`` and ``atol_velocity`` for scenes of lines
+            with the linear element (no bodies, no bending), else Kvaerno5 (see
+            :func:`~moorjax.dynamics.settings.resolve_tolerances`); or a name from
+            :data:`moorjax.dynamics.SOLVERS`, or a diffrax solver.
         rtol: relative error-control tolerance (of node positions and velocities).
         atol: absolute tolerance of node positions [m] (default 0.1 mm: a
             tension error of about EA/l·atol).
