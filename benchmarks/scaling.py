@@ -55,7 +55,7 @@ def per_step(ns, linear_solver, duration, case="A"):
         scene = case_scene(case, n)
         if (case, n) not in _INITS:
             _INITS[case, n] = static_init(scene)
-        r = timed_run(scene, duration, init=_INITS[case, n], linear_solver=linear_solver)
+        r = timed_run(scene, duration, init=_INITS[case, n], linear_solver=linear_solver, solver="kvaerno5")
         us = 1e6 * r["run_s"] / r["steps"] if r["steps"] else float("nan")
         rows.append(dict(case=case, N=n, linear_solver=linear_solver, duration_s=duration,
                          us_per_step=us, us_per_step_node=us / (n - 1), **r))

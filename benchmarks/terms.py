@@ -128,7 +128,7 @@ def main(argv=None):
     for name, scene in vs:
         ops = hlo_lines(scene, y)
         us, finite = us_per_vf(scene, y)
-        r = timed_run(scene, duration, init=init)
+        r = timed_run(scene, duration, init=init, solver="kvaerno5")
         res = r["result"]
         lowest = (float(jnp.min(res.final_state[0].r[:, 2])) if res is not None else float("nan"))
         if res is not None and lowest < -depth:

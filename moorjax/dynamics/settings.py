@@ -165,9 +165,15 @@ def plan(
             steps are exactly ``dt``.
     """
     check_adjoint(adjoint)
-    for name, tol in (("rtol", rtol), ("atol", atol)):
-        if not np.isfinite(float(tol)):
-            raise ValueError(f"{name} = {tol} must be finite")
+    if atol_velocity is None:
+        atol_velocity = 100.0 * float(atol)
+    for name, tol, unit, hi in (  # the tolerances as given (auto may scale them below)
+        ("rtol", rtol, "", 0.1),
+        ("atol", atol, " m", 0.1),
+        ("atol_velocity", atol_velocity, " m/s", 10.0),
+    ):
+        if not (1e-14 <= float(tol) <= hi):
+            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
     solver, rtol, atol, atol_velocity = resolve_tolerances(solver, rtol, atol, atol_velocity, scene)
     if scene is not None and linear_solver in ("reduced", "block") and not banded_jacobian(scene):
         linear_solver = "dense"
@@ -194,15 +200,6 @@ def plan(
             raise ValueError(f"the last output time {tsn[-1]} s must be after t0 = {t0} s")
         if scene is not None:
             check_time_span(scene, float(t0), float(tsn[-1]))
-    if atol_velocity is None:
-        atol_velocity = 100.0 * float(atol)
-    for name, tol, unit, hi in (
-        ("rtol", rtol, "", 0.1),
-        ("atol", atol, " m", 0.1),
-        ("atol_velocity", atol_velocity, " m/s", 10.0),
-    ):
-        if not (1e-14 <= float(tol) <= hi):
-            raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
     norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
     rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
 

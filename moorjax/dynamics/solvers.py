@@ -136,7 +136,8 @@ def make_solver(
         from .vector_field import stiff_band
 
         structured = not dense_newton and linear_solver != "dense"
-        return LINEARLY_IMPLICIT[key](structured=structured, band=stiff_band if structured else None)
+        band = _ByName(stiff_band) if structured else None
+        return LINEARLY_IMPLICIT[key](structured=structured, band=band)
     if key not in IMPLICIT:
         raise ValueError(f"unknown solver {name!r}; choose one of {', '.join(SOLVERS)}")
     if dense_newton:
@@ -162,3 +163,26 @@ def make_solver(
 
 def is_implicit(name: str) -> bool:
     return name.lower().replace("-", "_") in IMPLICIT
+
+
+class _ByName:
+    """A module-level function as a solver's static field, named by its import
+    path: equal and hashed as the function, and printed without an object
+    address, so that a stored program's key (``moorjax._cache``) is the same in
+    every process."""
+
+    def __init__(self, fn):
+        self.fn = fn
+
+    def __call__(self, *args, **kwargs):
+        return self.fn(*args, **kwargs)
+
+    def __eq__(self, other):
+        return isinstance(other, _ByName) and other.fn is self.fn
+
+    def __hash__(self):
+        return hash(self.fn)
+
+    def __repr__(self):
+        return f"{self.fn.__module__}.{self.fn.__qualname__}"
+
