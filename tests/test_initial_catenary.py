@@ -19,27 +19,9 @@ from moorjax.dynamics.initial import catenary_state, equilibrium_state
 from moorjax.io import build_scene, parse_deck
 from moorjax.statics import solve_line_statics
 
-DECK = """t
----------------------- LINE TYPES -----------------------------------
-TypeName   Diam    Mass/m     EA     BA/-zeta    EI   Cd   Ca   CdAx  CaAx
-(name)     (m)     (kg/m)     (N)    (N-s/-)     (-)  (-)  (-)  (-)   (-)
-rope       0.1     20.0       1e8    -1.0        0    1.2  0.5  0.1   0.0
----------------------- POINTS ---------------------------------------
-ID  Attachment  X     Y    Z      Mass  Volume  CdA  Ca
-(#) (-)         (m)   (m)  (m)    (kg)  (m^3)   (m2) (-)
-1   Fixed       0     0    -50    0     0       0    0
-2   {word}      30    0    -30    500   2.0     1.5  0.8
-3   Fixed       60    0    -5     0     0       0    0
----------------------- LINES ----------------------------------------
-ID  LineType  AttachA  AttachB  UnstrLen  NumSegs  LineOutputs
-(#) (name)    (#)      (#)      (m)       (-)      (-)
-1   rope      1        2        40        4        -
-2   rope      2        3        40        8        -
----------------------- OPTIONS --------------------------------------
-50        WtrDpth
-0         TmaxIC
------------------------ need this line ------------------------------
-"""
+from test_deck_free_points import DECK as _FREE_POINT_DECK  # a free point on two lines
+
+DECK = _FREE_POINT_DECK.replace("{mass}", "500")
 
 
 @pytest.fixture(scope="module")

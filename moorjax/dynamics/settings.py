@@ -83,7 +83,8 @@ AUTO_FALLBACK = "kvaerno5"
 #: 0.05). At a tenth: 0.16 % and 0.038, and on the reference cases (20 s, error
 #: against the N = 160 references) A, N = 40: 0.79 % at 7.6 ms per simulated s
 #: (Kvaerno5 at the full tolerances: 0.84 % at 14.0), B, N = 10: 0.66 % at 3.6
-#: (Kvaerno5: 0.67 % at 3.9). See benchmarks/README.md, "Issue 17, session 10".
+#: (Kvaerno5: 0.67 % at 3.9; in another run 4.8 against 3.1). See
+#: benchmarks/README.md, "Issue 17, session 10".
 AUTO_ROS_TOLERANCE = 0.1
 
 
