@@ -99,8 +99,10 @@ def resolve_tolerances(solver, rtol, atol, atol_velocity=None, scene=None):
         return name, rtol, atol, atol_velocity
     if atol_velocity is None:
         atol_velocity = 100.0 * float(atol)
-    k = AUTO_ROS_TOLERANCE
-    return name, k * float(rtol), k * float(atol), k * float(atol_velocity)
+    def scaled(tol):  # 1e-6, not 1.0000000000000002e-06, in the recorded settings
+        return float(f"{AUTO_ROS_TOLERANCE * float(tol):.12g}")
+
+    return name, scaled(rtol), scaled(atol), scaled(atol_velocity)
 
 
 def resolve_solver(solver, scene=None):
