@@ -258,7 +258,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "tensions, units) or .csv (tensions and forces)")
     d.add_argument("--no-nodes", action="store_true",
                    help="leave node positions and segment tensions out (huge runs)")
-    d.add_argument("--initial", choices=("statics", "catenary"), default="statics",
+    from .dynamics.simulate import INITIAL
+
+    d.add_argument("--initial", choices=INITIAL, default="statics",
                    help="start: statics, the static equilibrium of lines, points and bodies at "
                         "--t0; catenary, MoorDyn's start with TmaxIC = 0: each line's own static "
                         "shape with the points and bodies where the deck puts them, at rest and "

@@ -138,3 +138,25 @@ def test_cli_wave_kinematics_option(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode != 0
     assert "defines no 'nothing'" in bad.stderr
+
+
+def test_wave_kinematics_option_errors_name_the_problem(tmp_path):
+    """``--wave-kinematics`` parsing (``moorjax._cli_load.wave_kinematics_from``)."""
+    from moorjax._cli_load import wave_kinematics_from
+
+    assert wave_kinematics_from(None) is None
+    ok = wave_kinematics_from(f"{DATA / 'kinematics.py'}:wave")
+    assert isinstance(ok, ExternalWaves)
+    broken = tmp_path / "broken.py"
+    broken.write_text("import no_such_module_here\n")
+    values = tmp_path / "values.py"
+    values.write_text("speed = 3.0\nfrom moorjax.model import ExternalWaves\n"
+                      "field = ExternalWaves(lambda r, t: (r * 0, r * 0))\n")
+    assert isinstance(wave_kinematics_from(f"{values}:field"), ExternalWaves)  # an instance as is
+    for spec, msg in ((str(DATA / "kinematics.py"), "expected FILE.py:NAME"),
+                      (f"{tmp_path / 'missing.py'}:f", "no such file"),
+                      (f"{broken}:f", "importing .* failed: ModuleNotFoundError"),
+                      (f"{values}:nothing", "defines no 'nothing'"),
+                      (f"{values}:speed", "'speed' is a float, not a function")):
+        with pytest.raises(ValueError, match=msg):
+            wave_kinematics_from(spec)

@@ -54,12 +54,16 @@ def check_geometry(scene, t0=0.0):
     """Refuse impossible geometry before anything runs: ``ValueError`` naming the
     line whose end is below the seabed or that cannot reach its ends (bodies at
     η = 0). Skipped for traced values."""
-    lines = scene.lines
-    if scene.bodies:
-        zero = [jnp.zeros(6)] * len(scene.bodies)
-        lines = attach(scene.lines, scene.bodies, zero, zero)
-    for line in lines:
+    for line in _lines_at_rest(scene):
         fem.check_geometry(line, scene.env, t0)
+
+
+def _lines_at_rest(scene):
+    """The scene's lines with their fairleads where the bodies are at η = 0, at rest."""
+    if not scene.bodies:
+        return scene.lines
+    zero = [jnp.zeros(6)] * len(scene.bodies)
+    return attach(scene.lines, scene.bodies, zero, zero)
 
 
 def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
@@ -96,10 +100,8 @@ def catenary_state(scene, t0=0.0) -> Equilibrium:
     does. ``converged`` is ``lines_converged.all()``.
     """
     check_geometry(scene, t0)
-    zero = [jnp.zeros(6)] * len(scene.bodies)
-    lines = attach(scene.lines, scene.bodies, zero, zero) if scene.bodies else scene.lines
     states, oks = [], []
-    for line in lines:
+    for line in _lines_at_rest(scene):
         st = solve_line_statics(line, scene.env, t0, throw=False)
         state, straight, ok = st.state(), line.straight_state(t0), st.converged
         if jax.tree_util.tree_structure(state) == jax.tree_util.tree_structure(straight):
@@ -220,9 +222,14 @@ def _body_newton(scene, t, loads, tol, max_iterations):
     return poses, inits, converged
 
 
+def failed_lines(scene, eq: Equilibrium) -> list[str]:
+    """Labels of the lines whose static solve did not converge (concrete ``eq``)."""
+    return [scene.lines[i].label for i, ok in enumerate(np.asarray(eq.lines_converged)) if not ok]
+
+
 def not_converged_message(scene, eq: Equilibrium) -> str:
     """Why an equilibrium (concrete) is no start, naming the lines that failed."""
-    bad = [scene.lines[i].label for i, ok in enumerate(np.asarray(eq.lines_converged)) if not ok]
+    bad = failed_lines(scene, eq)
     if bad:
         return (f"the static solve of line(s) {', '.join(bad)} did not converge (Newton failed "
                 "or left a force imbalance); check the geometry (can the line reach its ends?), "

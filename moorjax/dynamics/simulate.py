@@ -22,10 +22,9 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from .initial import initial_state as initial_state
-from .initial import catenary_state, equilibrium_state, not_converged_message
+from .initial import catenary_state, equilibrium_state, failed_lines, not_converged_message
 from .integrate import SimulationResult as SimulationResult
 from .._cache import StoredProgram
 from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
@@ -179,8 +178,8 @@ def _named_start(scene, name, t0):
         raise ValueError(f"init = {name!r}: expected a tuple of states or one of {INITIAL}")
     eq = catenary_state(scene, t0)
     if not isinstance(eq.converged, jax.core.Tracer) and not bool(eq.converged):
-        bad = [scene.lines[i].label for i, ok in enumerate(np.asarray(eq.lines_converged)) if not ok]
-        warnings.warn(f"init='catenary': the static solve of line(s) {', '.join(bad)} with the points "
+        warnings.warn(f"init='catenary': the static solve of line(s) {', '.join(failed_lines(scene, eq))} "
+                      "with the points "
                       "and bodies where the scene puts them did not converge; they start straight "
                       "between their ends, as MoorDyn's lines do when its catenary fails",
                       RuntimeWarning, stacklevel=3)

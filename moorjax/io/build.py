@@ -60,7 +60,6 @@ import numpy as np
 from ..body.point import ConnectionPoint
 from ..body.submerged import SubmergedBody
 from ..model import (
-    AbstractWaveKinematics,
     AddedMass,
     AiryWaves,
     Bathymetry,
@@ -378,10 +377,7 @@ def _scene_waves(deck: Deck, waves, depth: float, g: float):
                 f"{where}: external wave kinematics (--wave-kinematics, build_scene's waves) are "
                 "MoorDyn's WaveKin = 1; this deck has its own wave setting, so set WaveKin to 1 in the "
                 "deck to drive it from a function")
-        if not isinstance(waves, AbstractWaveKinematics):
-            raise InputError(f"build_scene: waves must be an AbstractWaveKinematics (e.g. "
-                             f"moorjax.model.ExternalWaves(f)), got {type(waves).__name__}")
-        return waves
+        return waves  # (Environment checks its type)
     if mode == 1:
         warnings.warn(
             f"{where}: the wave kinematics are external (MoorDyn sets them through its API at run "
