@@ -208,6 +208,7 @@ class StoredProgram:
         self.jitted = eqx.filter_jit(fn)
         self.storable = storable
         self._programs = {}
+        self._ahead = {}  # key → Future of a compiled program (compile_ahead)
 
     def key(self, in_tree, static, leaves):
         import hashlib
@@ -229,26 +230,73 @@ class StoredProgram:
                           str(jax.config.jax_enable_x64), *parts, *static_leaves, *avals])
         return hashlib.sha256(text.encode()).hexdigest()[:40]
 
-    def __call__(self, *args, **kwargs):
+    def _program(self, args, kwargs):
+        """(key, program, leaves) for these arguments (arrays or
+        ``jax.ShapeDtypeStruct``), loading or exporting the program; ``None``
+        where the plain ``filter_jit`` must serve them (see the class)."""
         import equinox as eqx
         import jax
 
         folder = programs_dir() if enabled() and _can_serialise() else None
         if folder is None or (self.storable is not None and not self.storable(*args, **kwargs)):
-            return self.jitted(*args, **kwargs)
-        dyn, static = eqx.partition((args, kwargs), eqx.is_array)
+            return None
+        dyn, static = eqx.partition((args, kwargs), _array_or_spec)
         leaves, in_tree = jax.tree_util.tree_flatten(dyn)
         if any(isinstance(x, jax.core.Tracer) for x in leaves):
-            return self.jitted(*args, **kwargs)
+            return None
         key = self.key(in_tree, static, leaves)
         if key is None:
-            return self.jitted(*args, **kwargs)
+            return None
         program = self._programs.get(key) or self._load(folder, key)
         if program is None:
             program = self._export(folder, key, in_tree, static, leaves)
         if program is _UNSTORABLE:
+            return None
+        return key, program, leaves
+
+    def compile_ahead(self, *args, **kwargs) -> bool:
+        """Prepare the call with arguments of this structure (arrays or
+        ``jax.ShapeDtypeStruct`` for those not known yet) now: trace or load the
+        program here, and compile it on a background thread, so that other work
+        (the static equilibrium a run starts from, compiled and run meanwhile)
+        overlaps the compile; the next call of this structure waits for it.
+        XLA releases Python's lock while it compiles, so on a machine with two
+        or more cores the two compiles run side by side. False (nothing
+        started) where the call would not use a stored program."""
+        import concurrent.futures
+
+        import jax
+
+        found = self._program(args, kwargs)
+        if found is None:
+            return False
+        key, (call, out_tree, out_static), leaves = found
+        if key in self._ahead or not hasattr(call, "lower"):
+            return key in self._ahead
+        specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
+                 for x in leaves]
+        lowered = call.lower(*specs)  # here: lowering traces, and tracing holds the lock
+        pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="moorjax-compile")
+        self._ahead[key] = pool.submit(lowered.compile)
+        pool.shutdown(wait=False)
+        return True
+
+    def __call__(self, *args, **kwargs):
+        import equinox as eqx
+        import jax
+
+        found = self._program(args, kwargs)
+        if found is None:
             return self.jitted(*args, **kwargs)
-        call, out_tree, out_static = program
+        key, (call, out_tree, out_static), leaves = found
+        ahead = self._ahead.pop(key, None)
+        if ahead is not None:
+            try:
+                call = ahead.result()
+            except Exception:  # the compile failed off the main thread: compile here instead
+                pass
+            else:
+                self._programs[key] = (call, out_tree, out_static)
         return eqx.combine(jax.tree_util.tree_unflatten(out_tree, call(*leaves)), out_static)
 
     def _load(self, folder, key):
@@ -311,6 +359,13 @@ class StoredProgram:
         _write(folder, key + ".tree", meta)
         _write(folder, key + ".hlo", blob)  # last: a .hlo is always complete
         return program
+
+
+def _array_or_spec(x) -> bool:
+    import equinox as eqx
+    import jax
+
+    return eqx.is_array(x) or isinstance(x, jax.ShapeDtypeStruct)
 
 
 #: marks a structure whose program jax.export cannot store (host callbacks)

@@ -178,6 +178,31 @@ def test_stored_program_loads_without_tracing(monkeypatch, tmp_path):
     assert float(g) == -3.0
 
 
+def test_compile_ahead_serves_the_next_call(monkeypatch, tmp_path):
+    """compile_ahead traces now (shapes only) and compiles on a thread; the next
+    call of that structure uses that program: no second trace, same answer."""
+    import jax
+
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    Spring, traces, force, jnp = _program_fixture()
+    program = _cache.StoredProgram(force)
+    spec = jax.ShapeDtypeStruct((4,), jnp.zeros(()).dtype)
+    assert program.compile_ahead(Spring(jnp.asarray(2.0), 3), spec)
+    assert traces == [1] and len(program._ahead) == 1
+    out = program(Spring(jnp.asarray(5.0), 3), jnp.arange(4.0))
+    assert traces == [1] and not program._ahead
+    assert list(jax.device_get(out["f"])) == [-0.0, -5.0, -10.0] and out["n"] == 3
+    # prepared for one shape, called with another: that call compiles its own
+    assert program.compile_ahead(Spring(jnp.asarray(2.0), 3), jax.ShapeDtypeStruct((6,), spec.dtype))
+    out = program(Spring(jnp.asarray(1.0), 3), jnp.arange(5.0))
+    assert list(jax.device_get(out["f"])) == [-0.0, -1.0, -2.0] and len(program._ahead) == 1
+    # nothing is prepared where no stored program would serve the call
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "0")
+    assert not _cache.StoredProgram(force).compile_ahead(Spring(jnp.asarray(2.0), 3), spec)
+
+
 def test_code_outside_moorjax_is_never_loaded(monkeypatch, tmp_path):
     """A user's own class (its code is not in the key) is traced every time."""
     monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))

@@ -66,6 +66,17 @@ def _lines_at_rest(scene):
     return attach(scene.lines, scene.bodies, zero, zero)
 
 
+def start_layout(scene) -> tuple:
+    """The layout of a start's packed solver state (see
+    :func:`~moorjax.dynamics.vector_field.pack`) as ``jax.ShapeDtypeStruct``s,
+    without solving anything: each line's (rows, 6) array, then each body's
+    state at rest."""
+    dtype = jnp.zeros(()).dtype
+    lines = tuple(jax.ShapeDtypeStruct((line.element.state_rows(line), 6), dtype)
+                  for line in scene.lines)
+    return lines + tuple(jax.eval_shape(body.rest_state) for body in scene.bodies)
+
+
 def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
                       max_iterations: int = 50) -> Equilibrium:
     """The static equilibrium of ``scene`` at ``t0`` as a start (see the module notes).

@@ -238,8 +238,12 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
     # -- the diffrax solver interface -------------------------------------------
     def init(self, terms, t0, t1, y0, args):
         f0 = terms.vf(t0, y0, args)
-        return _State(f0, self._jacobian(terms, t0, y0, args), jnp.asarray(0),
-                      jnp.asarray(t1 - t0, dtype=float))
+        if self.jacobian_age <= 1:  # every step builds its own W: keep only its layout
+            like = jax.eval_shape(lambda: self._jacobian(terms, t0, y0, args))
+            jac = jtu.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), like)
+        else:
+            jac = self._jacobian(terms, t0, y0, args)
+        return _State(f0, jac, jnp.asarray(0), jnp.asarray(t1 - t0, dtype=float))
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         tab, st = self.tableau, solver_state

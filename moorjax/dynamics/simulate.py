@@ -24,7 +24,8 @@ import jax
 import jax.numpy as jnp
 
 from .initial import initial_state as initial_state
-from .initial import catenary_state, equilibrium_state, failed_lines, not_converged_message
+from .initial import (catenary_state, equilibrium_state, failed_lines, not_converged_message,
+                      start_layout)
 from .integrate import SimulationResult as SimulationResult
 from .._cache import StoredProgram
 from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
@@ -124,6 +125,9 @@ def simulate(
         save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
         progress=progress, scene=scene, retry_failed_steps=retry_failed_steps,
     )
+    if init is None or isinstance(init, str):
+        # the start is a static solve: compile the integration meanwhile
+        _integrate.compile_ahead(scene, start_layout(scene), p, count=bool(count_newton))
     if isinstance(init, str):
         init = _named_start(scene, init, t0)
     if init is None:

@@ -118,6 +118,10 @@ class AbstractElement(eqx.Module):
         r, v = line.nodes(t, LineState(r=q[:, :3], v=q[:, 3:]))
         return r, v, self.segment_tensions(line, r, v)
 
+    def state_rows(self, line) -> int:
+        """Rows of the line's packed (rows, 6) solver state: its free nodes."""
+        return line.n_segments - 1
+
     def unpack_state(self, line, q):
         """The packed state q as the element's state pytree (a ``LineState`` here)."""
         from ..model.line import LineState

@@ -340,6 +340,10 @@ class HermiteElement(AbstractElement):
 
         return outputs(line, env, t, q)
 
+    def state_rows(self, line) -> int:
+        """[r, v] rows of the free nodes, then [d, dv] rows of every node (2n)."""
+        return 2 * line.n_segments
+
     def unpack_state(self, line, q):
         from .hermite_motion import unpack_hermite
 
