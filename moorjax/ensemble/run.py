@@ -37,8 +37,10 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from ..dynamics.initial import check_geometry, equilibrium_state
-from ..dynamics.integrate import SUCCESS_CODE, SimulationResult, integrate, result_codes, result_names
+from .._cache import StoredProgram
+from ..dynamics.initial import check_geometry, equilibrium_state, start_layout
+from ..dynamics.integrate import (SUCCESS_CODE, SimulationResult, integrate, result_codes,
+                                  result_names, storable_run)
 from ..dynamics.settings import plan
 from ..dynamics.vector_field import pack
 from . import batch as _batch
@@ -49,12 +51,14 @@ TRACES = {"ensemble": 0, "statics": 0}
 STATUS_OK = "ok"
 
 
-def _traced_integrate(scene, y0, settings):
+def _vmapped_integrate(scenes, y0, settings):
     TRACES["ensemble"] += 1  # runs at trace time only
-    return integrate(scene, y0, settings)
+    return eqx.filter_vmap(integrate, in_axes=(0, 0, None))(scenes, y0, settings)
 
 
-_batched_integrate = eqx.filter_jit(eqx.filter_vmap(_traced_integrate, in_axes=(0, 0, None)))
+#: the batched integration, stored by structure like ``simulate``'s (a new process
+#: running an ensemble of the same structure and member count loads it)
+_batched_integrate = StoredProgram(_vmapped_integrate, storable=storable_run)
 
 
 def _traced_equilibrium(scene, t0):
@@ -161,6 +165,16 @@ def simulate_ensemble(
         scenes = _batch.stack(scenes, name="scene")
     n = _batch.size(scenes)
     p = plan(duration, scene=_batch.member(scenes, 0), **settings)
+    if devices == "all":
+        devices = jax.local_devices()
+    devices = list(devices) if devices else []
+    # members sharded over devices: the plain jit (a stored program is one device's)
+    run = _batched_integrate if len(devices) <= 1 else _batched_integrate.jitted
+    if init is None and run is _batched_integrate:
+        # the statics compile and run while the integration compiles
+        layout = jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct((n,) + x.shape, x.dtype),
+                                        start_layout(_batch.member(scenes, 0)))
+        _batched_integrate.compile_ahead(scenes, layout, p)
     if init is None:
         init, ok = equilibrium(scenes, p.t0)
         failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))
@@ -176,15 +190,12 @@ def simulate_ensemble(
                 lambda x: jnp.where(bad.reshape((n,) + (1,) * (x.ndim - 1)), jnp.nan, x), init
             )
     y0 = pack(init)
-    if devices == "all":
-        devices = jax.local_devices()
-    devices = list(devices) if devices else []
     n_run = n
     if len(devices) > 1:
         n_run = -(-n // len(devices)) * len(devices)
         scenes, y0 = _pad(scenes, n_run), _pad(y0, n_run)
         scenes, y0 = _shard(scenes, devices), _shard(y0, devices)
-    res = _batched_integrate(scenes, y0, p)
+    res = run(scenes, y0, p)
     if n_run != n:
         res = jax.tree_util.tree_map(
             lambda x: x[:n] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == n_run else x,
