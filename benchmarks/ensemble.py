@@ -11,7 +11,11 @@ Columns: wall ms per simulated second per member for the vmapped ensemble, for
 moorjax run one member at a time, and for MoorDyn in a loop (one run per
 member, stepping loop only), plus the error of member 0 against the converged
 reference (RMS / std of the fairlead tension) for both codes, so the costs are
-compared at equal accuracy, and the worker's peak memory.
+compared at equal accuracy, and the worker's peak memory. ``first_call_ms_per_member``
+is the first call's wall time (compile, statics and run, a fresh process with
+an empty compilation cache, as a user's first run) per member and ``first_call_vs_single_run``
+that over one single run's run time (compile excluded): issue 17's ensemble
+figure.
 
     python benchmarks/ensemble.py [--cases A B] [--sizes 1 10 100 1000]
                                   [--duration 10] [--quick] [--json PATH]
@@ -26,6 +30,7 @@ import os
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -33,11 +38,12 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
-#: resolution per case: the cheapest moorjax setting under 1 % error (see
+#: resolution per case: the segment count at which moorjax's default solver
+#: (``auto``: ROS34PW2 at a tenth of the tolerances) is under 1 % error (see
 #: vs_moordyn.py) and MoorDyn's cheapest run under 1 % (reference README)
 SETTINGS = {
-    "A": dict(n=40, solver="kvaerno5", moordyn=(40, "rk2", 3.125e-3)),
-    "B": dict(n=10, solver="kvaerno3", moordyn=(10, "rk2", 1.667e-3)),
+    "A": dict(n=40, solver="auto", moordyn=(40, "rk2", 3.125e-3)),
+    "B": dict(n=10, solver="auto", moordyn=(10, "rk2", 1.667e-3)),
 }
 
 
@@ -86,7 +92,8 @@ def worker(case, m, duration, solver=None, dt=None):
            if ref else None)
     st = status(res)
     out = dict(
-        case=case, members=m, compile_s=first - run, run_s=run,
+        case=case, members=m, compile_s=first - run, run_s=run, first_s=first,
+        first_call_ms_per_member=first / m * 1e3,
         ms_per_sim_s_per_member=run / duration / m * 1e3,
         recompiled=TRACES != traces, failed=int(np.sum(st != "ok")),
         steps_mean=float(np.mean(res.num_steps)), steps_max=int(np.max(res.num_steps)),
@@ -158,11 +165,13 @@ def main(argv=None):
               f"{md['setting']}: {md['stepping_ms']:.2f} ms/sim-s (stepping), error "
               f"{(md['rel_err'] or float('nan')) * 100:.2f} %", flush=True)
         for m in a.sizes:
-            p = subprocess.run([sys.executable, __file__, "--worker", case, str(m),
-                                "--duration", str(a.duration)]
-                               + (["--solver", a.solver] if a.solver else [])
-                               + (["--dt", str(a.dt)] if a.dt else []),
-                               capture_output=True, text=True)
+            with tempfile.TemporaryDirectory() as cache:  # a user's first run: nothing cached
+                p = subprocess.run([sys.executable, __file__, "--worker", case, str(m),
+                                    "--duration", str(a.duration)]
+                                   + (["--solver", a.solver] if a.solver else [])
+                                   + (["--dt", str(a.dt)] if a.dt else []),
+                                   capture_output=True, text=True,
+                                   env=dict(os.environ, MOORJAX_CACHE_DIR=cache))
             if p.returncode != 0:
                 print(p.stderr[-2000:])
                 rows.append(dict(case=case, members=m, error=p.stderr[-300:]))
@@ -171,11 +180,14 @@ def main(argv=None):
             r.update(solver=a.solver or SETTINGS[case]["solver"], dt=a.dt, single_ms=single, moordyn_ms=md["stepping_ms"], moordyn_err=md["rel_err"],
                      moordyn_setting=md["setting"],
                      vs_single=r["ms_per_sim_s_per_member"] / single,
+                     first_call_vs_single_run=r["first_call_ms_per_member"] / (single * a.duration),
                      vs_moordyn=r["ms_per_sim_s_per_member"] / md["stepping_ms"])
             rows.append(r)
             print(f"  M={m:5d}: {r['ms_per_sim_s_per_member']:8.3f} ms/sim-s/member "
                   f"(x{r['vs_single']:.2f} of one-by-one, x{r['vs_moordyn']:.2f} of MoorDyn), "
-                  f"compile {r['compile_s']:.1f} s, recompiled={r['recompiled']}, "
+                  f"compile {r['compile_s']:.1f} s, first call {r['first_call_ms_per_member']:.1f} ms "
+                  f"per member (x{r['first_call_vs_single_run']:.2f} of one run), "
+                  f"recompiled={r['recompiled']}, "
                   f"failed {r['failed']}, steps {r['steps_mean']:.0f}/{r['steps_max']}, "
                   f"err member0 {(r['rel_err_member0'] or float('nan')) * 100:.2f} %, "
                   f"peak RSS {r['peak_rss_mb']:.0f} MB", flush=True)

@@ -290,6 +290,7 @@ class StoredProgram:
             return self.jitted(*args, **kwargs)
         key, (call, out_tree, out_static), leaves = found
         ahead = self._ahead.pop(key, None)
+        self._ahead.clear()  # prepared for calls that did not come: let them go
         if ahead is not None:
             try:
                 call = ahead.result()
