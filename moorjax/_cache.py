@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import weakref
 
 _OFF = ("0", "false", "off", "no")
 
@@ -209,6 +210,7 @@ class StoredProgram:
         self.storable = storable
         self._programs = {}
         self._ahead = {}  # key → Future of a compiled program (compile_ahead)
+        _INSTANCES.add(self)
 
     def key(self, in_tree, static, leaves):
         import hashlib
@@ -261,12 +263,16 @@ class StoredProgram:
         (the static equilibrium a run starts from, compiled and run meanwhile)
         overlaps the compile; the next call of this structure waits for it.
         XLA releases Python's lock while it compiles, so on a machine with two
-        or more cores the two compiles run side by side. False (nothing
-        started) where the call would not use a stored program."""
+        or more cores the two compiles run side by side (and the peak memory is
+        both compiles'). False (nothing started) where the call would not use a
+        stored program, or with ``MOORJAX_COMPILE_AHEAD=0`` (also
+        ``false``/``off``/``no``)."""
         import concurrent.futures
 
         import jax
 
+        if os.environ.get("MOORJAX_COMPILE_AHEAD", "1").strip().lower() in _OFF:
+            return False
         found = self._program(args, kwargs)
         if found is None:
             return False
@@ -360,6 +366,20 @@ class StoredProgram:
         _write(folder, key + ".tree", meta)
         _write(folder, key + ".hlo", blob)  # last: a .hlo is always complete
         return program
+
+
+#: every StoredProgram, for :func:`clear_programs`
+_INSTANCES = weakref.WeakSet()
+
+
+def clear_programs():
+    """Forget the programs every :class:`StoredProgram` holds in memory (the
+    files stay): with ``jax.clear_caches()`` this frees the compiled
+    executables of a long session (``compile_ahead`` keeps its compiled
+    program itself, which JAX's cache clearing does not reach)."""
+    for program in list(_INSTANCES):
+        program._programs.clear()
+        program._ahead.clear()
 
 
 def _array_or_spec(x) -> bool:

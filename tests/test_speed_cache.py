@@ -198,6 +198,14 @@ def test_compile_ahead_serves_the_next_call(monkeypatch, tmp_path):
     assert program.compile_ahead(Spring(jnp.asarray(2.0), 3), jax.ShapeDtypeStruct((6,), spec.dtype))
     out = program(Spring(jnp.asarray(1.0), 3), jnp.arange(5.0))
     assert list(jax.device_get(out["f"])) == [-0.0, -1.0, -2.0] and not program._ahead
+    # clear_programs lets the compiled programs go (the files stay)
+    assert program._programs
+    _cache.clear_programs()
+    assert not program._programs and not program._ahead
+    # switched off: nothing prepared, the call compiles as before
+    monkeypatch.setenv("MOORJAX_COMPILE_AHEAD", "0")
+    assert not program.compile_ahead(Spring(jnp.asarray(2.0), 2), spec) and not program._ahead
+    monkeypatch.delenv("MOORJAX_COMPILE_AHEAD")
     # nothing is prepared where no stored program would serve the call
     monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "0")
     assert not _cache.StoredProgram(force).compile_ahead(Spring(jnp.asarray(2.0), 3), spec)
