@@ -272,3 +272,25 @@ def test_a_new_process_neither_traces_nor_compiles_the_run(tmp_path):
     assert {"integrate", "_solve_core"} & set(runs[1]["traced"]) == set()
     assert "flat" in runs[0]["traced"] and "flat" not in runs[1]["traced"]
     assert runs[0]["tension"] == runs[1]["tension"]
+
+
+def test_an_impossible_line_stops_before_anything_compiles(monkeypatch, tmp_path):
+    """simulate checks the geometry before it hands the integration's compile
+    to a background thread: a line that cannot reach its ends raises at once."""
+    import importlib
+
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from moorjax.dynamics import simulate
+    from moorjax.examples import example
+    from moorjax.io import build_scene, read_deck
+
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", "1")
+    scene = build_scene(read_deck(example("oc3_catenary").deck))
+    far = eqx.tree_at(lambda s: s.lines[0].length, scene, jnp.asarray(10.0))
+    program = importlib.import_module("moorjax.dynamics.simulate")._integrate
+    with pytest.raises(ValueError, match="impossible geometry"):
+        simulate(far, 1.0)
+    assert not program._ahead

@@ -24,8 +24,8 @@ import jax
 import jax.numpy as jnp
 
 from .initial import initial_state as initial_state
-from .initial import (catenary_state, equilibrium_state, failed_lines, not_converged_message,
-                      start_layout)
+from .initial import (catenary_state, check_geometry, equilibrium_state, failed_lines,
+                      not_converged_message, start_layout)
 from .integrate import SimulationResult as SimulationResult
 from .._cache import StoredProgram
 from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
@@ -126,7 +126,9 @@ def simulate(
         progress=progress, scene=scene, retry_failed_steps=retry_failed_steps,
     )
     if init is None or isinstance(init, str):
-        # the start is a static solve: compile the integration meanwhile
+        # the start is a static solve: compile the integration meanwhile (after
+        # the geometry checks, so that an impossible line stops before any compile)
+        check_geometry(scene, t0)
         _integrate.compile_ahead(scene, start_layout(scene), p, count=bool(count_newton))
     if isinstance(init, str):
         init = _named_start(scene, init, t0)
