@@ -31,9 +31,14 @@ def cache_dir() -> str:
     return os.path.join(root, "jax")
 
 
+def _switched_on(name: str) -> bool:
+    """Whether the environment switch ``name`` is on (default on; off: :data:`_OFF`)."""
+    return os.environ.get(name, "1").strip().lower() not in _OFF
+
+
 def enabled() -> bool:
     """Whether the persistent cache is wanted (``MOORJAX_COMPILATION_CACHE``)."""
-    return os.environ.get("MOORJAX_COMPILATION_CACHE", "1").strip().lower() not in _OFF
+    return _switched_on("MOORJAX_COMPILATION_CACHE")
 
 
 def enable_compilation_cache(jax) -> str | None:
@@ -271,7 +276,7 @@ class StoredProgram:
 
         import jax
 
-        if os.environ.get("MOORJAX_COMPILE_AHEAD", "1").strip().lower() in _OFF:
+        if not _switched_on("MOORJAX_COMPILE_AHEAD"):
             return False
         found = self._program(args, kwargs)
         if found is None:
@@ -279,8 +284,7 @@ class StoredProgram:
         key, (call, out_tree, out_static), leaves = found
         if key in self._ahead or not hasattr(call, "lower"):
             return key in self._ahead
-        specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
-                 for x in leaves]
+        specs = _specs(leaves)
         lowered = call.lower(*specs)  # here: lowering traces, and tracing holds the lock
         pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="moorjax-compile")
         self._ahead[key] = pool.submit(lowered.compile)
@@ -345,8 +349,7 @@ class StoredProgram:
             found["static"] = out_static
             return out_leaves
 
-        specs = [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
-                 for x in leaves]
+        specs = _specs(leaves)
         try:
             exported = jax.export.export(jax.jit(flat))(*specs)
             blob = exported.serialize()
@@ -380,6 +383,14 @@ def clear_programs():
     for program in list(_INSTANCES):
         program._programs.clear()
         program._ahead.clear()
+
+
+def _specs(leaves) -> list:
+    """The shape, dtype and weak type of each leaf (array or spec)."""
+    import jax
+
+    return [jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
+            for x in leaves]
 
 
 def _array_or_spec(x) -> bool:
