@@ -4,11 +4,29 @@ Every norm or square root that can be evaluated at zero (a node at rest in still
 water, a zero-length segment) is written so that its *derivative* is finite there
 too. A NaN in a Jacobian makes every Newton step of an implicit solver fail, so
 physics code uses these helpers instead of ``jnp.linalg.norm``/``jnp.sqrt``.
+
+Also :func:`as_float`, how constructors take their numbers without an XLA op.
 """
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
+import numpy as np
+
+
+def as_float(x, shape=None):
+    """``x`` as a float array (reshaped to ``shape``): a concrete value is
+    converted by NumPy and placed on the device, a traced one by ``jnp``. Each eager
+    ``jnp`` operation on concrete values is a small XLA program of its own,
+    compiled (or loaded from the cache) once per process: tens of them in a
+    scene's construction cost a new process a noticeable part of a second."""
+    if isinstance(x, jax.core.Tracer):
+        a = jnp.asarray(x, dtype=float)
+        return a if shape is None else a.reshape(shape)
+    a = np.asarray(x, dtype=float)
+    # device_put, not jnp.asarray: the latter compiles a small copy program per shape
+    return jax.device_put(a if shape is None else a.reshape(shape))
 
 
 def safe_norm(x, axis=-1, keepdims=False):

@@ -294,3 +294,42 @@ def test_an_impossible_line_stops_before_anything_compiles(monkeypatch, tmp_path
     with pytest.raises(ValueError, match="impossible geometry"):
         simulate(far, 1.0)
     assert not program._ahead
+
+
+def _programs_built(fn):
+    """Names of the XLA programs lowered while ``fn()`` runs (after clearing JAX's
+    in-memory caches, so that programs built earlier in the process count too)."""
+    import jax
+
+    jax.clear_caches()
+    built = []
+
+    def listen(event, duration, **kw):
+        if event.endswith("jaxpr_to_mlir_module_duration"):
+            built.append(kw.get("fun_name"))
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    try:
+        out = fn()
+    finally:
+        jax.monitoring.unregister_event_duration_listener(listen)
+    return out, built
+
+
+def test_building_a_scene_and_checking_it_run_no_eager_operations():
+    """Each eager jnp operation on concrete values is a small XLA program of its
+    own, compiled (or loaded) once per process: a deck's scene is built without
+    any, and its geometry check (a tabulated fairlead motion looked up at t0)
+    and the start's assembly are one small program each."""
+    from moorjax.dynamics.initial import check_geometry
+    from moorjax.examples import example
+    from moorjax.io import build_scene, read_deck
+    from moorjax.io.build import read_deck_motion
+
+    ex = example("oc3_catenary")
+    deck = read_deck(ex.deck)
+    motion = read_deck_motion(ex.motion, deck)
+    scene, built = _programs_built(lambda: build_scene(deck, motion=motion))
+    assert built == []
+    _, built = _programs_built(lambda: check_geometry(scene, 0.0))
+    assert built == ["jit(_end_positions)"]

@@ -26,6 +26,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array
 
+from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
@@ -71,7 +72,7 @@ def start_layout(scene) -> tuple:
     :func:`~moorjax.dynamics.vector_field.pack`) as ``jax.ShapeDtypeStruct``s,
     without solving anything: each line's (rows, 6) array, then each body's
     state at rest."""
-    dtype = jnp.zeros(()).dtype
+    dtype = jax.dtypes.canonicalize_dtype(float)
     lines = tuple(jax.ShapeDtypeStruct((line.element.state_rows(line), 6), dtype)
                   for line in scene.lines)
     return lines + tuple(jax.eval_shape(body.rest_state) for body in scene.bodies)
@@ -89,11 +90,18 @@ def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
     """
     if not scene.bodies:
         sts = [solve_line_statics(line, scene.env, t0, throw=False) for line in scene.lines]
-        ok = jnp.stack([st.converged for st in sts])
-        return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok))
+        return _lines_equilibrium(tuple(sts))
     check_geometry(scene, t0)
-    return _body_equilibrium(scene, jnp.asarray(t0, dtype=float), bool(loads), float(tol),
+    return _body_equilibrium(scene, as_float(t0), bool(loads), float(tol),
                              int(max_iterations))
+
+
+@eqx.filter_jit
+def _lines_equilibrium(sts) -> Equilibrium:
+    """The lines' static solves as one start (one small program, not one eager
+    XLA operation per slice and stack)."""
+    ok = jnp.stack([st.converged for st in sts])
+    return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok))
 
 
 def catenary_state(scene, t0=0.0) -> Equilibrium:

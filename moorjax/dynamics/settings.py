@@ -21,6 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from .._numerics import as_float
 from .adjoint import ADJOINTS, banded_jacobian, check_adjoint
 from .meter import StepMeter
 from .solvers import LINEARLY_IMPLICIT, StateNorm, is_implicit, make_solver
@@ -203,8 +204,8 @@ def plan(
             raise ValueError(f"the last output time {tsn[-1]} s must be after t0 = {t0} s")
         if scene is not None:
             check_time_span(scene, float(t0), float(tsn[-1]))
-    norm = StateNorm(jnp.asarray(float(atol) / float(atol_velocity)))
-    rtol_a, atol_a = jnp.asarray(float(rtol)), jnp.asarray(float(atol))
+    norm = StateNorm(as_float(float(atol) / float(atol_velocity)))
+    rtol_a, atol_a = as_float(float(rtol)), as_float(float(atol))
 
     if isinstance(solver, str):
         name = solver
@@ -247,7 +248,7 @@ def plan(
 
     meter = StepMeter() if progress else diffrax.NoProgressMeter()
     return Settings(
-        ts, jnp.asarray(float(t0)), solver, controller, jnp.asarray(float(step0)),
+        ts, as_float(float(t0)), solver, controller, as_float(float(step0)),
         int(max_steps), bool(save_nodes), meter, name, adjoint, int(checkpoints),
         host_checked=not isinstance(ts, jax.core.Tracer),
     )

@@ -49,23 +49,24 @@ from .._numerics import abs_times, safe_norm
 from ..model.axial import Bilateral, LinearEA
 from .base import AbstractElement
 
+# the element's constants are NumPy arrays (no XLA op at import; constants in a trace)
 _GX, _GW = np.polynomial.legendre.leggauss(5)
-XI = jnp.asarray(0.5 * (_GX + 1.0))  # quadrature points on [0, 1]
-WQ = jnp.asarray(0.5 * _GW)  # and weights (sum 1)
+XI = 0.5 * (_GX + 1.0)  # quadrature points on [0, 1]
+WQ = 0.5 * _GW  # and weights (sum 1)
 
 
 def _hermite(xi):
     """Shape functions (4, Q) and their first and second ξ-derivatives."""
     x2, x3 = xi * xi, xi * xi * xi
-    h = jnp.stack([1 - 3 * x2 + 2 * x3, xi - 2 * x2 + x3, 3 * x2 - 2 * x3, x3 - x2])
-    d = jnp.stack([-6 * xi + 6 * x2, 1 - 4 * xi + 3 * x2, 6 * xi - 6 * x2, 3 * x2 - 2 * xi])
-    dd = jnp.stack([-6 + 12 * xi, -4 + 6 * xi, 6 - 12 * xi, 6 * xi - 2])
+    h = np.stack([1 - 3 * x2 + 2 * x3, xi - 2 * x2 + x3, 3 * x2 - 2 * x3, x3 - x2])
+    d = np.stack([-6 * xi + 6 * x2, 1 - 4 * xi + 3 * x2, 6 * xi - 6 * x2, 3 * x2 - 2 * xi])
+    dd = np.stack([-6 + 12 * xi, -4 + 6 * xi, 6 - 12 * xi, 6 * xi - 2])
     return h, d, dd
 
 
 def _lagrange(xi):
     """Quadratic Lagrange functions on ξ = 0, ½, 1: (3, Q)."""
-    return jnp.stack([(1 - xi) * (1 - 2 * xi), 4 * xi * (1 - xi), xi * (2 * xi - 1)])
+    return np.stack([(1 - xi) * (1 - 2 * xi), 4 * xi * (1 - xi), xi * (2 * xi - 1)])
 
 
 H, DH, DDH = _hermite(XI)

@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import warnings
 
+import jax
 import numpy as np
 
 from ..body.point import ConnectionPoint
@@ -229,7 +230,8 @@ def build_scene(deck: Deck, segments: int | None = None, motion=None, element=No
             n = 2
         dt = deck.line_types[dl.line_type]
         lt = _line_type(dt, dl.length, n)
-        weights.append(float(lt.wet_weight(rho, g)))
+        # on the host: the line type with NumPy leaves computes without XLA operations
+        weights.append(float(jax.tree_util.tree_map(np.asarray, lt).wet_weight(rho, g)))
         lines.append(Line(lt, dl.length, n, ends[dl.point_a], ends[dl.point_b], element=element,
                           label=str(dl.id)))
 

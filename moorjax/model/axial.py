@@ -19,6 +19,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
 from .._checks import check_nonnegative, check_positive
+from .._numerics import as_float
 
 
 class AbstractAxialLaw(eqx.Module):
@@ -48,7 +49,7 @@ class LinearEA(AbstractAxialLaw):
 
     def __init__(self, ea: ArrayLike):
         check_positive(ea, "EA", "N")
-        self.ea = jnp.asarray(ea, dtype=float)
+        self.ea = as_float(ea)
 
     def tension_positive(self, strain):
         return self.ea * strain
@@ -98,10 +99,10 @@ class PolyesterWu(AbstractAxialLaw):
         check_positive(alpha, "alpha", "-")
         check_nonnegative(beta, "beta", "-")
         check_positive(breaking_strength, "breaking strength Bs", "N")
-        self.rhol = jnp.asarray(rhol, dtype=float)
-        self.alpha = jnp.asarray(alpha, dtype=float)
-        self.beta = jnp.asarray(beta, dtype=float)
-        self.breaking_strength = jnp.asarray(breaking_strength, dtype=float)
+        self.rhol = as_float(rhol)
+        self.alpha = as_float(alpha)
+        self.beta = as_float(beta)
+        self.breaking_strength = as_float(breaking_strength)
         self.cap = cap
 
     def tension_positive(self, strain):
@@ -133,9 +134,9 @@ class PolyesterMBL(AbstractAxialLaw):
         check_positive(mbl, "MBL", "N")
         check_positive(alpha, "alpha", "-")
         check_nonnegative(beta, "beta", "-")
-        self.mbl = jnp.asarray(mbl, dtype=float)
-        self.alpha = jnp.asarray(alpha, dtype=float)
-        self.beta = jnp.asarray(beta, dtype=float)
+        self.mbl = as_float(mbl)
+        self.alpha = as_float(alpha)
+        self.beta = as_float(beta)
         self.cap = cap
 
     def tension_positive(self, strain):

@@ -16,6 +16,7 @@ from jax import lax
 from jaxtyping import Array
 
 from .._checks import check_finite, check_positive
+from .._numerics import as_float
 
 
 class AbstractEnd(eqx.Module):
@@ -50,7 +51,7 @@ class FixedEnd(AbstractEnd):
 
     def __init__(self, point):
         check_finite(point, "end position", "m")
-        self.point = jnp.asarray(point, dtype=float).reshape(3)
+        self.point = as_float(point, 3)
 
     def position(self, t):
         return self.point
@@ -73,8 +74,8 @@ class KinematicEnd(AbstractEnd):
     speed: Array
 
     def __init__(self, point, velocity):
-        self.point = jnp.asarray(point, dtype=float).reshape(3)
-        self.speed = jnp.asarray(velocity, dtype=float).reshape(3)
+        self.point = as_float(point, 3)
+        self.speed = as_float(velocity, 3)
 
     def position(self, t):
         return self.point
@@ -111,8 +112,8 @@ class BodyEnd(AbstractEnd):
         check_finite(point, "fairlead position in body axes", "m")
         check_finite(origin, "body origin", "m")
         self.body = int(body)
-        self.point = jnp.asarray(point, dtype=float).reshape(3)
-        self.origin = jnp.asarray(origin, dtype=float).reshape(3)
+        self.point = as_float(point, 3)
+        self.origin = as_float(origin, 3)
 
     def position(self, t):
         return self.origin + self.point
@@ -136,10 +137,10 @@ class SinePath(AbstractEnd):
         check_finite(center, "path center", "m")
         check_finite(amplitude, "path amplitude", "m")
         check_positive(period, "path period", "s")
-        self.center = jnp.asarray(center, dtype=float).reshape(3)
-        self.amplitude = jnp.asarray(amplitude, dtype=float).reshape(3)
-        self.period = jnp.asarray(period, dtype=float)
-        self.phase = jnp.asarray(phase, dtype=float)
+        self.center = as_float(center, 3)
+        self.amplitude = as_float(amplitude, 3)
+        self.period = as_float(period)
+        self.phase = as_float(phase)
 
     def _w(self):
         return 2 * jnp.pi / self.period
@@ -188,18 +189,18 @@ class TabulatedPath(AbstractEnd):
     uniform: bool = eqx.field(static=True)
 
     def __init__(self, t, position, velocity=None):
-        t = jnp.asarray(t, dtype=float)
-        r = jnp.asarray(position, dtype=float)
+        t = as_float(t)
+        r = as_float(position)
         if t.ndim != 1 or t.shape[0] < 2 or r.shape != (t.shape[0], 3):
             raise ValueError(f"tabulated path needs t (k>=2,) and position (k, 3); got {t.shape}, {r.shape}")
         check_finite(t, "path time", "s")
         check_finite(r, "path position", "m")
-        if not bool(jnp.all(jnp.diff(t) > 0)):
+        if not isinstance(t, jax.core.Tracer) and not np.all(np.diff(np.asarray(t)) > 0):
             raise ValueError("tabulated path: times [s] must be strictly increasing")
         if velocity is None:
             v = jnp.gradient(r, t, axis=0)
         else:
-            v = jnp.asarray(velocity, dtype=float)
+            v = as_float(velocity)
             if v.shape != r.shape:
                 raise ValueError(f"tabulated path velocity shape {v.shape} != position shape {r.shape}")
             check_finite(v, "path velocity", "m/s")
@@ -207,7 +208,10 @@ class TabulatedPath(AbstractEnd):
         self.uniform = _uniform_grid(t)
 
     def time_span(self):
-        return self.t[0], self.t[-1]
+        if isinstance(self.t, jax.core.Tracer):
+            return self.t[0], self.t[-1]
+        t = np.asarray(self.t)  # concrete: read on the host, no XLA op
+        return float(t[0]), float(t[-1])
 
     def _interval(self, t):
         """The index i of the interval [t_i, t_i+1) holding t (clipped to the table)."""
@@ -289,12 +293,12 @@ class ClampedEnd(AbstractClampedEnd):
     def __init__(self, point, direction):
         check_finite(point, "end position", "m")
         check_finite(direction, "clamp direction", "-")
-        d = jnp.asarray(direction, dtype=float).reshape(3)
+        d = as_float(direction, 3)
         norm = jnp.linalg.norm(d)
         if not isinstance(norm, jax.core.Tracer) and float(norm) == 0.0:
             raise ValueError("ClampedEnd: direction = (0, 0, 0) has no direction; give the unit "
                              "vector along which the line leaves the clamp, e.g. (1, 0, 0)")
-        self.point = jnp.asarray(point, dtype=float).reshape(3)
+        self.point = as_float(point, 3)
         self.unit = d / norm
 
     def position(self, t):

@@ -14,6 +14,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._checks import check_finite, check_nonnegative, check_positive
+from .._numerics import as_float
 from .waves import AbstractWaveKinematics
 
 
@@ -34,8 +35,8 @@ class SeabedFriction(eqx.Module):
     def __init__(self, mu, v_slip=1e-2):
         check_nonnegative(mu, "seabed friction coefficient", "-")
         check_positive(v_slip, "friction slip velocity", "m/s")
-        self.mu = jnp.asarray(mu, dtype=float)
-        self.v_slip = jnp.asarray(v_slip, dtype=float)
+        self.mu = as_float(mu)
+        self.v_slip = as_float(v_slip)
 
 
 class Bathymetry(eqx.Module):
@@ -126,13 +127,13 @@ class Seabed(eqx.Module):
                  bathymetry: Bathymetry | None = None, damping_depth=None):
         check_positive(stiffness, "seabed stiffness kBot", "Pa/m")
         check_nonnegative(damping, "seabed damping cBot", "Pa·s/m")
-        self.stiffness = jnp.asarray(stiffness, dtype=float)
-        self.damping = jnp.asarray(damping, dtype=float)
+        self.stiffness = as_float(stiffness)
+        self.damping = as_float(damping)
         self.friction = friction
         self.bathymetry = bathymetry
         if damping_depth is not None:
             check_nonnegative(damping_depth, "seabed damping ramp depth", "m")
-            damping_depth = jnp.asarray(damping_depth, dtype=float)
+            damping_depth = as_float(damping_depth)
         self.damping_depth = damping_depth
 
     def rest_penetration(self, wet_weight, diameter):
@@ -182,7 +183,7 @@ class UniformCurrent(AbstractDepthCurrent):
 
     def __init__(self, velocity):
         check_finite(velocity, "current velocity", "m/s")
-        self.u = jnp.asarray(velocity, dtype=float).reshape(3)
+        self.u = as_float(velocity, 3)
 
     def velocity(self, z, t=0.0):
         return jnp.broadcast_to(self.u, jnp.shape(z) + (3,))
@@ -356,9 +357,9 @@ class Environment(eqx.Module):
         if waves is not None and not isinstance(waves, AbstractWaveKinematics):
             raise ValueError("waves must be an AbstractWaveKinematics (moorjax.model.waves: AiryWaves, "
                              f"ExternalWaves), got {type(waves).__name__}")
-        self.depth = jnp.asarray(depth, dtype=float)
-        self.rho = jnp.asarray(rho, dtype=float)
-        self.g = jnp.asarray(g, dtype=float)
+        self.depth = as_float(depth)
+        self.rho = as_float(rho)
+        self.g = as_float(g)
         self.seabed = seabed
         self.current = current
         self.waves = waves

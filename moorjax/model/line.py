@@ -13,6 +13,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._checks import check_positive
+from .._numerics import as_float
 from .ends import AbstractEnd
 from .line_type import LineType
 
@@ -56,7 +57,7 @@ class Line(eqx.Module):
         if int(n_segments) != n_segments or n_segments < 1:
             raise ValueError(f"number of segments = {n_segments} must be an integer >= 1")
         self.line_type = line_type
-        self.length = jnp.asarray(length, dtype=float)
+        self.length = as_float(length)
         self.n_segments = int(n_segments)
         self.end_a = end_a
         self.end_b = end_b

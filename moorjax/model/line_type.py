@@ -26,6 +26,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from .._checks import check_nonnegative, check_positive
+from .._numerics import as_float
 from .axial import AbstractAxialLaw, LinearEA
 
 
@@ -38,8 +39,8 @@ class MorisonDrag(eqx.Module):
     def __init__(self, cd_normal, cd_axial=0.0):
         check_nonnegative(cd_normal, "Cd normal", "-")
         check_nonnegative(cd_axial, "Cd axial", "-")
-        self.cd_normal = jnp.asarray(cd_normal, dtype=float)
-        self.cd_axial = jnp.asarray(cd_axial, dtype=float)
+        self.cd_normal = as_float(cd_normal)
+        self.cd_axial = as_float(cd_axial)
 
 
 class AddedMass(eqx.Module):
@@ -51,8 +52,8 @@ class AddedMass(eqx.Module):
     def __init__(self, ca_normal, ca_axial=0.0):
         check_nonnegative(ca_normal, "Ca normal", "-")
         check_nonnegative(ca_axial, "Ca axial", "-")
-        self.ca_normal = jnp.asarray(ca_normal, dtype=float)
-        self.ca_axial = jnp.asarray(ca_axial, dtype=float)
+        self.ca_normal = as_float(ca_normal)
+        self.ca_axial = as_float(ca_axial)
 
 
 class LineType(eqx.Module):
@@ -96,14 +97,14 @@ class LineType(eqx.Module):
             axial = LinearEA(axial)
         if mbl is not None:
             check_positive(mbl, "MBL", "N")
-            mbl = jnp.asarray(mbl, dtype=float)
+            mbl = as_float(mbl)
         if ei is not None:
             check_nonnegative(ei, "bending stiffness EI", "N·m²")
-            ei = jnp.asarray(ei, dtype=float)
-        self.diameter = jnp.asarray(diameter, dtype=float)
-        self.mass_per_length = jnp.asarray(mass_per_length, dtype=float)
+            ei = as_float(ei)
+        self.diameter = as_float(diameter)
+        self.mass_per_length = as_float(mass_per_length)
         self.axial = axial
-        self.damping = jnp.asarray(damping, dtype=float)
+        self.damping = as_float(damping)
         self.drag = drag
         self.added_mass = added_mass
         self.mbl = mbl

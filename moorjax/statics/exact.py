@@ -29,7 +29,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
-from .._numerics import safe_norm
+from .._numerics import as_float, safe_norm
 from ..element.linear import LinearElement
 from .catenary import catenary_line_forces, catenary_nodes, catenary_profile
 from ..model.axial import LinearEA
@@ -126,7 +126,7 @@ def _sag_above(sol, bed, ra, rb, length):
 
 def catenary_solves(line, env, t=0.0) -> bool:
     """Whether the catenary statics of an eligible line holds at ``t`` (host-side)."""
-    return bool(_ok(line, env, jnp.asarray(t, dtype=float)))
+    return bool(_ok(line, env, as_float(t)))
 
 
 @eqx.filter_jit

@@ -31,7 +31,7 @@ import optimistix as optx
 from jaxtyping import Array
 
 from .._cache import StoredProgram
-from .._numerics import safe_norm
+from .._numerics import as_float, safe_norm
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
 from ..linalg.undetermined import MinimumNorm
@@ -133,7 +133,7 @@ def _force_scale(line, env, t):
     return scale
 
 
-_ALPHAS = 2.0 ** -jnp.arange(16)
+_ALPHAS = 2.0 ** -np.arange(16.0)  # NumPy: no XLA op at import
 
 
 def _band_step(fn, y, fy, mu):
@@ -174,13 +174,14 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step):
         mu = jnp.max(jnp.abs(fy)) / soft_length
         dy = step(fn, y, fy, mu)
         dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f
-        g = jax.vmap(lambda a: -jnp.sum(fn(y + a * dy, None) * dy))(_ALPHAS)
+        alphas = jnp.asarray(_ALPHAS)
+        g = jax.vmap(lambda a: -jnp.sum(fn(y + a * dy, None) * dy))(alphas)
         g = jnp.where(jnp.isfinite(g), g, jnp.inf)
         down = g <= 0.0  # the energy still decreases at α
         k = jnp.argmax(down)  # the largest such α (α decreases with k)
         k = jnp.where(jnp.any(down), k, _ALPHAS.shape[0] - 1)
-        a_lo = _ALPHAS[k]
-        a_hi = _ALPHAS[jnp.maximum(k - 1, 0)]
+        a_lo = alphas[k]
+        a_hi = alphas[jnp.maximum(k - 1, 0)]
         g_lo, g_hi = g[k], g[jnp.maximum(k - 1, 0)]
         # k = 0: the full step still descends, take it; otherwise interpolate the
         # sign change of g between a_lo (g <= 0) and a_hi (g > 0)
@@ -220,11 +221,18 @@ def _grounded_length(line, env, r):
 MAX_STRAIN = 0.5
 
 
+@eqx.filter_jit
+def _end_positions(line, t):
+    # one small program per line structure: a tabulated motion's lookup run
+    # eagerly would be some twenty XLA operations, each compiled on its own
+    return line.end_a.position(t), line.end_b.position(t)
+
+
 def check_geometry(line, env, t):
     """Python-level checks on concrete end positions (skipped under tracing)."""
     try:
-        ra = np.asarray(line.end_a.position(t), dtype=float)
-        rb = np.asarray(line.end_b.position(t), dtype=float)
+        ends = _end_positions(line, t if isinstance(t, jax.core.Tracer) else np.float64(t))
+        ra, rb = (np.asarray(r, dtype=float) for r in ends)
         length = float(line.length)
         depth = float(env.depth)
     except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError, TypeError):
@@ -300,7 +308,7 @@ def solve_line_statics(
         raise ValueError(
             f"line {line.label}: method='catenary' needs a linear element with Hooke's law "
             "(LinearEA), no current and a flat seabed; use method='fem' or 'auto'")
-    t = jnp.asarray(t, dtype=float)
+    t = as_float(t)
     if method == "fem" or not eligible:
         out = element_core(line)(line, env, t, init, rtol, atol, max_steps)
     else:

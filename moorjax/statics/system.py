@@ -23,6 +23,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from .exact import catenary_eligible, catenary_solves
 from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, check_geometry, element_core
@@ -67,7 +68,7 @@ def _line_statics_at(scene, poses, t, inits=None, methods=None):
     lines = _attached(scene, poses)
     inits = (None,) * len(lines) if inits is None else inits
     methods = ("fem",) * len(lines) if methods is None else methods
-    t = jnp.asarray(t, dtype=float)
+    t = as_float(t)
     # no end-below-the-bed check here: a free point resting on the seabed sinks to
     # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
     # a failed line solve is reported by ``converged``
@@ -199,7 +200,7 @@ def _ends_above_bed(scene, out) -> bool:
 
 def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> SystemStatics:
     nb = len(scene.bodies)
-    t = jnp.asarray(t, dtype=float)
+    t = as_float(t)
     scale = None
     converged = False
     it = 0
