@@ -128,36 +128,41 @@ def _bending_density(ei, d1, d2):
 
 def _distributed_load(line, env, r, d1, t, v=None):
     """External load per unstretched length (n, Q, 3) [N/m]: weight and buoyancy,
-    seabed contact (spring, and damper and friction when moving), Morison drag on
-    the velocity ``v`` relative to the current (``None``: at rest)."""
+    seabed contact (:meth:`~moorjax.model.environment.Seabed.contact`: spring,
+    and ramped damper and friction when moving; flat or a bathymetry), the water's
+    acceleration under waves (Froude–Krylov and added mass, as the linear
+    element's), Morison drag on the velocity ``v`` relative to the current and
+    the waves' velocity (``None``: at rest, no waves' loads). A Hermite line is
+    buoyant everywhere: it must stay under the free surface (the linear element
+    models partial wetting)."""
     lt = line.line_type
-    q = jnp.zeros_like(r).at[..., 2].add(-lt.wet_weight(env.rho, env.g))
+    weight = lt.wet_weight(env.rho, env.g)
+    q = jnp.zeros_like(r).at[..., 2].add(-weight)
     if env.seabed is not None:
-        bed = env.seabed
-        if bed.bathymetry is not None:
-            raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported yet; "
-                             "use LinearElement for lines over a 3-D seabed")
-        pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
-        normal = bed.stiffness * lt.diameter * pen
-        q = q.at[..., 2].add(normal)
-        if v is not None:
-            q = q.at[..., 2].add(jnp.where(pen > 0, -bed.damping * lt.diameter * v[..., 2], 0.0))
-            if bed.friction is not None:
-                fr = bed.friction
-                uh = v[..., :2]
-                speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
-                q = q.at[..., :2].add(-(fr.mu * normal / speed)[..., None] * uh)
-    if env.waves is not None:
-        raise ValueError("HermiteElement: wave kinematics (Environment.waves) are not supported yet; "
-                         "use LinearElement for lines in waves")
+        q = q + env.seabed.contact(r, v, lt.diameter, weight, env.depth)[0]
+    stretch = safe_norm(d1)[..., None]
+    tangent = d1 / jnp.maximum(stretch, 1e-300)
+
+    def split(u):  # tangential and normal parts
+        ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
+        return ut, u - ut
+
+    r_current, wave_u = r, None
+    if env.waves is not None and v is not None:
+        eta, wave_u, wave_a = env.waves.kinematics(r, t)
+        r_current = r.at[..., 2].set(env.waves.current_height(r, eta))
+        at, an = split(wave_a)
+        ca_n = ca_t = 0.0
+        if lt.added_mass is not None:
+            ca_n, ca_t = lt.added_mass.ca_normal, lt.added_mass.ca_axial
+        q = q + env.rho * lt.area * stretch * ((1.0 + ca_n) * an + (1.0 + ca_t) * at)
     if lt.drag is not None and (env.current is not None or v is not None):
         u = jnp.zeros_like(r) if v is None else v
         if env.current is not None:
-            u = u - env.current.velocity_at(r, t)
-        stretch = safe_norm(d1)[..., None]
-        tangent = d1 / jnp.maximum(stretch, 1e-300)
-        ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
-        un = u - ut
+            u = u - env.current.velocity_at(r_current, t)
+        if wave_u is not None:
+            u = u - wave_u
+        ut, un = split(u)
         cn = 0.5 * env.rho * lt.drag.cd_normal * lt.diameter
         ca = 0.5 * env.rho * lt.drag.cd_axial * jnp.pi * lt.diameter
         q = q - stretch * (cn * abs_times(un) + ca * abs_times(ut))
@@ -318,7 +323,6 @@ class HermiteElement(AbstractElement):
     def state_rate(self, line, env, t, q):
         from .hermite_motion import state_rate
 
-        _check_supported(line, env)
         return state_rate(line, env, t, q)
 
     def state_end_forces(self, line, env, t, q):
@@ -333,7 +337,6 @@ class HermiteElement(AbstractElement):
     def state_end_response(self, line, env, t, q):
         from .hermite_motion import end_response
 
-        _check_supported(line, env)
         return end_response(line, env, t, q)
 
     def state_outputs(self, line, env, t, q):
@@ -369,13 +372,6 @@ class HermiteElement(AbstractElement):
 
     def end_forces(self, line, env, r, v, t=0.0):
         self._node_only()
-
-
-def _check_supported(line, env):
-    """Trace-time refusal of what the Hermite dynamics does not model."""
-    if env.seabed is not None and env.seabed.bathymetry is not None:
-        raise ValueError("HermiteElement: a bathymetry grid (SeafloorFile) is not supported; "
-                         "use --element linear (LinearElement) for lines over a 3-D seabed")
 
 
 def clamped_slopes(line, t=0.0):

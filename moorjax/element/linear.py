@@ -327,24 +327,16 @@ def _fluid_inertia(lt, env, a, tangent, stretched):
 
 
 def _seabed(lt, env, r, v, node_len):
-    """Contact force (n+1, 3) [N]: (kBot·δ − cBot·ż)·d·l_node for penetration δ > 0."""
-    bed = env.seabed
-    if bed.bathymetry is not None:
-        return _seabed_3d(lt, bed, env, r, v, node_len)
-    depth_pen = -env.depth - r[:, 2]
-    touching = depth_pen > 0
-    area = lt.diameter * node_len
-    normal = jnp.where(touching, bed.stiffness * depth_pen * area, 0.0)
-    ramp = bed.damping_fraction(depth_pen, lt.wet_weight(env.rho, env.g), lt.diameter)
-    vertical = normal - bed.damping * ramp * v[:, 2] * area
-    vertical = vertical.at[jnp.array([0, -1])].add(_end_support(lt, env, depth_pen, node_len))
-    force = jnp.zeros_like(r).at[:, 2].set(vertical)
-    if bed.friction is not None:
-        fr = bed.friction
-        uh = v[:, :2]
-        speed = jnp.sqrt(jnp.sum(uh * uh, axis=-1) + fr.v_slip**2)
-        force = force.at[:, :2].add(-(fr.mu * normal / speed)[:, None] * uh)
-    return force
+    """Contact force (n+1, 3) [N]: the bed's load per unit length
+    (:meth:`~moorjax.model.environment.Seabed.contact`: kBot·δ − cBot·v·n along
+    the bed's normal, friction along it) on each node's length, and the bed's
+    support of a grounded end (:func:`_end_support`; on a bathymetry its
+    component along the normal, the rest stays on the end as on an inclined
+    catenary)."""
+    load, height, n = env.seabed.contact(r, v, lt.diameter, lt.wet_weight(env.rho, env.g), env.depth)
+    ends = jnp.array([0, -1])
+    support = _end_support(lt, env, -height, node_len) * n[ends, 2]
+    return (load * node_len[:, None]).at[ends].add(support[:, None] * n[ends])
 
 
 def _end_support(lt, env, pen, node_len):
@@ -361,34 +353,3 @@ def _end_support(lt, env, pen, node_len):
     neighbour_rests = pen[jnp.array([1, -2])] > 0
     share = jnp.maximum(lt.wet_weight(env.rho, env.g), 0.0) * node_len[jnp.array([0, -1])]
     return jnp.where(on_bed & neighbour_rests, share, 0.0)
-
-
-def _seabed_3d(lt, bed, env, r, v, node_len):
-    """Contact with a bathymetry grid, along the local seabed normal (n+1, 3) [N]."""
-    import jax
-
-    def height(xy):
-        return bed.bathymetry.height(xy[0], xy[1])
-
-    zb, grad = jax.vmap(jax.value_and_grad(height))(r[:, :2])
-    up = jnp.concatenate([-grad, jnp.ones_like(zb)[:, None]], axis=-1)
-    n = up / jnp.sqrt(jnp.sum(up * up, axis=-1, keepdims=True))  # never zero: n_z > 0
-    pen = (zb - r[:, 2]) * n[:, 2]
-    touching = pen > 0
-    area = lt.diameter * node_len
-    vn = jnp.sum(v * n, axis=-1)
-    normal = jnp.where(touching, bed.stiffness * pen * area, 0.0)
-    ramp = bed.damping_fraction(pen, lt.wet_weight(env.rho, env.g), lt.diameter)
-    magnitude = normal - bed.damping * ramp * vn * area
-    force = magnitude[:, None] * n
-    # the bed carries the normal component of the grounded end's weight share; its
-    # component along the slope stays on the end, as on an inclined catenary
-    ends = jnp.array([0, -1])
-    support = _end_support(lt, env, zb - r[:, 2], node_len) * n[ends, 2]
-    force = force.at[ends].add(support[:, None] * n[ends])
-    if bed.friction is not None:
-        fr = bed.friction
-        ut = v - vn[:, None] * n
-        speed = jnp.sqrt(jnp.sum(ut * ut, axis=-1) + fr.v_slip**2)
-        force = force - (fr.mu * normal / speed)[:, None] * ut
-    return force

@@ -151,6 +151,45 @@ class Seabed(eqx.Module):
         x = jnp.clip(pen / jnp.where(positive, ramp, 1.0), 0.0, 1.0)
         return jnp.where(positive, x * x * (3.0 - 2.0 * x), jnp.where(pen > 0, 1.0, 0.0))
 
+    def contact(self, r, v, diameter, wet_weight, depth):
+        """The bed's load per unit line length on points r (…, 3) [m] moving at v
+        (…, 3) [m/s] (``None``: at rest): (load (…, 3) [N/m], height above the
+        bed z − z_b (…) [m] (< 0: below), the bed's unit normal n (…, 3)).
+
+        The load is (kBot·δ − cBot·s(δ)·v·n)·d·n for a penetration δ > 0 along the
+        normal (the damping ramp s: :meth:`damping_fraction`), and with friction
+        −μ·kBot·δ·d·v_t/√(|v_t|² + v_slip²) on the velocity v_t along the bed.
+        Flat bed (no bathymetry): z_b = −depth, n = e_z."""
+        z = r[..., 2]
+        if self.bathymetry is None:
+            zb = -depth * jnp.ones_like(z)
+            n = jnp.zeros_like(r).at[..., 2].set(1.0)
+            pen = zb - z
+        else:
+            import jax
+
+            def height(xy):
+                return self.bathymetry.height(xy[0], xy[1])
+
+            flat = r.reshape(-1, 3)[:, :2]
+            zb, grad = jax.vmap(jax.value_and_grad(height))(flat)
+            zb, grad = zb.reshape(z.shape), grad.reshape(z.shape + (2,))
+            up = jnp.concatenate([-grad, jnp.ones_like(zb)[..., None]], axis=-1)
+            n = up / jnp.sqrt(jnp.sum(up * up, axis=-1, keepdims=True))  # never zero: n_z > 0
+            pen = (zb - z) * n[..., 2]  # the distance below the bed's tangent plane
+        spring = jnp.where(pen > 0, self.stiffness * pen * diameter, 0.0)
+        if v is None:
+            return spring[..., None] * n, z - zb, n
+        vn = jnp.sum(v * n, axis=-1)
+        ramp = self.damping_fraction(pen, wet_weight, diameter)
+        load = (spring - self.damping * ramp * vn * diameter)[..., None] * n
+        if self.friction is not None:
+            fr = self.friction
+            vt = v - vn[..., None] * n
+            speed = jnp.sqrt(jnp.sum(vt * vt, axis=-1) + fr.v_slip**2)
+            load = load - (fr.mu * spring / speed)[..., None] * vt
+        return load, z - zb, n
+
 
 class AbstractCurrent(eqx.Module):
     """A current field U(x, y, z, t) [m/s] (steady fields ignore t).

@@ -7,7 +7,10 @@ element's generalised force on them and its extensibility equation
 a dense LU: the slopes and tensions couple an element's two nodes fully) starts
 from the analytic elastic catenary — its positions, slopes dr/ds and the tension
 the axial law gives at its stretch — and attaches gradients by the implicit
-function theorem. Scaled as the linear element's statics: forces divided by the
+function theorem. With a seabed it starts instead from the linear element's
+equilibrium at twice the segments, whose globalised descent finds the bed and
+the touchdown (:func:`_linear_guess`), and Newton's steps are damped
+(:func:`_damped_newton`) before optimistix's Newton polishes the answer. Scaled as the linear element's statics: forces divided by the
 element stiffness EA/h, so each residual reads in metres.
 """
 
@@ -15,7 +18,9 @@ from __future__ import annotations
 
 import equinox as eqx
 import jax
+import jax.flatten_util
 import jax.numpy as jnp
+import numpy as np
 import optimistix as optx
 
 from .._numerics import safe_norm
@@ -23,6 +28,40 @@ from ..element.hermite import (WQ, HermiteDofs, clamped_slopes, element_fields, 
                                generalized_forces, static_residual)
 from ..element.hermite_motion import HermiteState, static_state
 from ..model.line import Line
+
+
+def _linear_guess(line: Line, env, t) -> HermiteDofs:
+    """Unknowns from the linear element's equilibrium at 2n segments: its even
+    nodes are the Hermite nodes, slopes by central differences (second-order
+    one-sided at the ends), the tension field (nodes and midpoints) from the
+    mean of the adjacent segments' tensions."""
+    from ..element.linear import LinearElement
+    from .fem import ATOL, MAX_STEPS, RTOL, _solve_core
+
+    n = line.n_segments
+    fine = Line(line.line_type, line.length, 2 * n, line.end_a, line.end_b,
+                element=LinearElement(), label=line.label)
+    st = _solve_core(fine, env, t, None, RTOL, ATOL, MAX_STEPS)
+    p, tens = st.positions, st.tensions
+    step = 2.0 * fine.segment_length
+    inner = (p[3::2] - p[1:-2:2]) / step
+    first = (-3.0 * p[0] + 4.0 * p[1] - p[2]) / step
+    last = (3.0 * p[-1] - 4.0 * p[-2] + p[-3]) / step
+    dr = jnp.concatenate([first[None], inner, last[None]])
+    lam = jnp.concatenate([tens[:1], 0.5 * (tens[:-1] + tens[1:]), tens[-1:]])
+    for node, d in clamped_slopes(line, t):
+        dr = dr.at[node].set(safe_norm(dr[node]) * d)
+    return HermiteDofs(r=p[::2], dr=dr, lam=lam)
+
+
+def _first_guess(line: Line, env, t) -> HermiteDofs:
+    """The start of a solve without ``init``: with a seabed the linear element's
+    equilibrium (:func:`_linear_guess`; from the flat catenary, Hermite Newton
+    failed on 16 of 200 drawn lines at 10 elements, 14 of them grounded, and the
+    catenary does not know a bathymetry), else :func:`hermite_guess`."""
+    if env.seabed is not None:
+        return _linear_guess(line, env, t)
+    return hermite_guess(line, env, t)
 
 
 def hermite_guess(line: Line, env, t=0.0) -> HermiteDofs:
@@ -119,7 +158,7 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
     h = line.segment_length
     k = lt.axial.nominal_ea() / h
     ra, rb = line.end_a.position(t), line.end_b.position(t)
-    y0 = hermite_guess(line, env, t) if init is None else _start(line, env, t, init, ra, rb)
+    y0 = _first_guess(line, env, t) if init is None else _start(line, env, t, init, ra, rb)
     y0 = (y0.r[1:-1], y0.dr, y0.lam)
 
     def fn(y, args):
@@ -131,8 +170,62 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
     y0 = jax.lax.stop_gradient(y0)
     if lt.ei is not None and init is None:
         y0 = _bending_continuation(line, env, t, y0, rtol, atol, max_steps)
+    if env.seabed is not None:  # the contact's kinks: where plain Newton cycles or diverges
+        y0 = _damped_newton(lambda y: fn(y, None), y0, atol, max_steps)
     sol = optx.root_find(fn, solver, y0, max_steps=max_steps, throw=False)
     return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
+
+
+#: trial step lengths of :func:`_damped_newton`, largest first
+_ALPHAS = 2.0 ** -np.arange(12.0)
+#: and the damping of its Levenberg–Marquardt directions (times the mean of diag JᵀJ)
+_MUS = 10.0 ** np.arange(-8.0, 1.0, 2.0)
+
+
+def _damped_newton(fn, y0, atol, max_steps):
+    """Newton's method with a backtracking search on |f|² (all trial steps at
+    once): the step taken is the longest of 1, ½, … 2⁻¹¹ that reduces the
+    residual, else the one of those and of Levenberg–Marquardt steps (damping
+    1e-8 … 1 of the mean of diag JᵀJ) that reduces it most. Stops when |f|∞ < atol/100 or
+    no trial step reduces it. Values only (the root finder that follows attaches
+    the implicit gradient). Plain Newton cycles where a quadrature point crosses
+    the seabed (the contact force has a kink there) and diverges where the
+    touchdown is much sharper than an element."""
+    flat0, unravel = jax.flatten_util.ravel_pytree(y0)
+
+    def f(x):
+        return jax.flatten_util.ravel_pytree(fn(unravel(x)))[0]
+
+    alphas = jnp.asarray(_ALPHAS)
+    mus = jnp.asarray(_MUS)
+
+    def cond(c):
+        x, fx, it, stuck = c
+        return (it < max_steps) & jnp.invert(stuck) & (jnp.max(jnp.abs(fx)) >= 0.01 * atol)
+
+    def body(c):
+        x, fx, it, _ = c
+        jac = jax.jacfwd(f)(x)
+        dx = -jnp.linalg.solve(jac, fx)
+        dx = jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0)
+        # Levenberg–Marquardt directions (descent directions of |f|² where the
+        # Newton step is not one: across a kink of the contact law)
+        jtj, jtf = jac.T @ jac, jac.T @ fx
+        scale = jnp.mean(jnp.diag(jtj))
+        lm = jax.vmap(lambda m: -jnp.linalg.solve(jtj + m * scale * jnp.eye(x.size), jtf))(mus)
+        steps = jnp.concatenate([alphas[:, None] * dx, jnp.where(jnp.isfinite(lm), lm, 0.0)])
+        trial = jax.vmap(lambda d: f(x + d))(steps)
+        size = jnp.sum(trial * trial, axis=1)
+        size = jnp.where(jnp.isfinite(size), size, jnp.inf)
+        now = jnp.sum(fx * fx)
+        better = size < now
+        k = jnp.where(jnp.any(better[:alphas.size]), jnp.argmax(better), jnp.argmin(size))
+        stuck = size[k] >= now
+        x_new = jnp.where(stuck, x, x + steps[k])
+        return x_new, jnp.where(stuck, fx, trial[k]), it + 1, stuck
+
+    x, *_ = jax.lax.while_loop(cond, body, (flat0, f(flat0), 0, False))
+    return unravel(x)
 
 
 #: Fractions of EI solved in turn from the catenary guess (then EI itself).
@@ -236,23 +329,26 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
 
 
 def _bed_support(line, env, dofs, fa, fb):
-    """End forces with the seabed carrying the downward push of an end held on it.
+    """End forces with the seabed carrying the push of an end held on it.
 
     An end on the bed (an anchor) cannot be pushed into it: the bed takes the
-    downward part of the end's vertical force (the share of the first element's
-    weight that the coarse cubic does not lay on the bed), so the anchor feels the
-    grounded tension, as in the analytic catenary and the linear element. An end
-    the line lifts off (upward force) is unchanged.
+    part of the end's force into the bed along its normal (the share of the
+    first element's weight that the coarse cubic does not lay on the bed), so
+    the anchor feels the grounded tension, as in the analytic catenary and the
+    linear element. An end the line lifts off is unchanged.
     """
     if env.seabed is None:
         return fa, fb
     tol = 1e-6 * env.depth
+    ends = dofs.r[jnp.array([0, -1])]
+    _, height, normal = env.seabed.contact(ends, None, line.line_type.diameter,
+                                           line.line_type.wet_weight(env.rho, env.g), env.depth)
 
-    def support(f, z_end):
-        on_bed = jnp.abs(z_end + env.depth) < tol
-        return f.at[2].set(jnp.where(on_bed, jnp.maximum(f[2], 0.0), f[2]))
+    def support(f, k):
+        push = jnp.minimum(jnp.dot(f, normal[k]), 0.0)
+        return jnp.where(jnp.abs(height[k]) < tol, f - push * normal[k], f)
 
-    return support(fa, dofs.r[0, 2]), support(fb, dofs.r[-1, 2])
+    return support(fa, 0), support(fb, 1)
 
 
 def _grounded_length(line, env, dofs):
@@ -262,6 +358,6 @@ def _grounded_length(line, env, dofs):
     lt = line.line_type
     w = lt.wet_weight(env.rho, env.g)
     r, _, _, _ = element_fields(line, dofs)
-    pen = jnp.maximum(-env.depth - r[..., 2], 0.0)
-    contact = env.seabed.stiffness * lt.diameter * jnp.sum(WQ * pen) * line.segment_length
+    load = env.seabed.contact(r, None, lt.diameter, w, env.depth)[0]  # along the bed's normal
+    contact = jnp.sum(WQ * safe_norm(load)) * line.segment_length
     return jnp.where(w > 0, contact / jnp.where(w > 0, w, 1.0), 0.0)
