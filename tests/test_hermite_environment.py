@@ -122,3 +122,29 @@ def test_line_in_waves_follows_the_fine_linear_element():
 
     dt = smooth(th) - smooth(tl)
     assert np.sqrt(np.mean(dt**2)) < 0.05 * np.std(smooth(tl)), np.sqrt(np.mean(dt**2)) / np.std(smooth(tl))
+
+
+def test_gradient_of_a_grounded_line_through_the_new_start():
+    """d T_B / d(EA, fairlead x) of a grounded Hermite line: with a seabed the
+    solve starts from the linear equilibrium and damps Newton's steps (values
+    only); the implicit function theorem still gives the derivative (central
+    differences)."""
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    env = mj.Environment(50.0, seabed=Seabed(3e6, 3e5))
+
+    def tb(p):
+        lt = eqx.tree_at(lambda t: t.axial.ea, LT_BED, p[0] * 1e8)
+        line = mj.Line(lt, 120.0, 6, mj.FixedEnd((0.0, 0.0, -50.0)),
+                       mj.FixedEnd(jnp.stack([p[1], 0.0, -10.0])), element=HermiteElement())
+        return solve_line_statics(line, env).tension_b
+
+    p = jnp.array([10.0, 95.0])
+    g = jax.jit(jax.grad(tb))(p)
+    f = jax.jit(tb)
+    for i, h in enumerate((1e-3, 1e-3)):
+        e = jnp.zeros(2).at[i].set(h)
+        fd = (float(f(p + e)) - float(f(p - e))) / (2 * h)
+        assert abs(float(g[i]) / fd - 1) < 1e-4, (i, float(g[i]), fd)

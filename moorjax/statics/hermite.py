@@ -155,25 +155,37 @@ def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None,
                         rtol=1e-10, atol=1e-8, max_steps=500):
     """The static unknowns (:class:`HermiteDofs`) and Newton's step count."""
     lt = line.line_type
-    h = line.segment_length
-    k = lt.axial.nominal_ea() / h
     ra, rb = line.end_a.position(t), line.end_b.position(t)
     y0 = _first_guess(line, env, t) if init is None else _start(line, env, t, init, ra, rb)
     y0 = (y0.r[1:-1], y0.dr, y0.lam)
-
-    def fn(y, args):
-        del args
-        force, moment, constraint = static_residual(line, env, _assemble(line, ra, rb, y), t)
-        return force[1:-1] / k, _clamp(line, t, moment / (k * h), y[1]), constraint
+    fn = _scaled_residual(line, env, t)
 
     solver = optx.Newton(rtol=rtol, atol=atol)
     y0 = jax.lax.stop_gradient(y0)
     if lt.ei is not None and init is None:
         y0 = _bending_continuation(line, env, t, y0, rtol, atol, max_steps)
     if env.seabed is not None:  # the contact's kinks: where plain Newton cycles or diverges
-        y0 = _damped_newton(lambda y: fn(y, None), y0, atol, max_steps)
+        from .fem import _values
+
+        values = _scaled_residual(*_values((line, env, t)))  # a search on values only
+        y0 = _damped_newton(lambda y: values(y, None), y0, atol, max_steps)
     sol = optx.root_find(fn, solver, y0, max_steps=max_steps, throw=False)
     return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
+
+
+def _scaled_residual(line, env, t):
+    """The static residual of the free unknowns (free positions, slopes, tension
+    field) as optimistix calls it, forces over the element stiffness EA/h."""
+    h = line.segment_length
+    k = line.line_type.axial.nominal_ea() / h
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+
+    def fn(y, args):
+        del args
+        force, moment, constraint = static_residual(line, env, _assemble(line, ra, rb, y), t)
+        return force[1:-1] / k, _clamp(line, t, moment / (k * h), y[1]), constraint
+
+    return fn
 
 
 #: trial step lengths of :func:`_damped_newton`, largest first
