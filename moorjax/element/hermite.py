@@ -45,8 +45,9 @@ import jax.lax as lax
 import jax.numpy as jnp
 import numpy as np
 
-from .._numerics import abs_times, safe_norm
+from .._numerics import safe_norm
 from ..model.axial import Bilateral, LinearEA
+from . import morison
 from .base import AbstractElement
 
 # the element's constants are NumPy arrays (no XLA op at import; constants in a trace)
@@ -142,30 +143,18 @@ def _distributed_load(line, env, r, d1, t, v=None):
         q = q + env.seabed.contact(r, v, lt.diameter, weight, env.depth)[0]
     stretch = safe_norm(d1)[..., None]
     tangent = d1 / jnp.maximum(stretch, 1e-300)
-
-    def split(u):  # tangential and normal parts
-        ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
-        return ut, u - ut
-
     r_current, wave_u = r, None
     if env.waves is not None and v is not None:
         eta, wave_u, wave_a = env.waves.kinematics(r, t)
         r_current = r.at[..., 2].set(env.waves.current_height(r, eta))
-        at, an = split(wave_a)
-        ca_n = ca_t = 0.0
-        if lt.added_mass is not None:
-            ca_n, ca_t = lt.added_mass.ca_normal, lt.added_mass.ca_axial
-        q = q + env.rho * lt.area * stretch * ((1.0 + ca_n) * an + (1.0 + ca_t) * at)
+        q = q + stretch * morison.fluid_inertia(lt, env, wave_a, tangent)
     if lt.drag is not None and (env.current is not None or v is not None):
         u = jnp.zeros_like(r) if v is None else v
         if env.current is not None:
             u = u - env.current.velocity_at(r_current, t)
         if wave_u is not None:
             u = u - wave_u
-        ut, un = split(u)
-        cn = 0.5 * env.rho * lt.drag.cd_normal * lt.diameter
-        ca = 0.5 * env.rho * lt.drag.cd_axial * jnp.pi * lt.diameter
-        q = q - stretch * (cn * abs_times(un) + ca * abs_times(ut))
+        q = q + stretch * morison.drag(lt, env, u, tangent)
     return q
 
 

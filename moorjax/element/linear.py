@@ -41,9 +41,10 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from .._numerics import abs_times, safe_unit
+from .._numerics import safe_unit
 from ..linalg import block_tridiagonal as btd
 from ..model.ends import clamp_directions
+from . import morison
 from .base import AbstractElement
 from .mass import AbstractMass, NodalMass
 
@@ -307,23 +308,13 @@ def _bending(ei, l, r, d_a=None, d_b=None):
 
 def _drag(lt, env, u, tangent, stretched):
     """Drag on one node from one adjacent element half: (n, 3) [N]."""
-    drag = lt.drag
-    ut = jnp.sum(u * tangent, axis=-1, keepdims=True) * tangent
-    un = u - ut
-    cn = 0.5 * env.rho * drag.cd_normal * lt.diameter
-    ca = 0.5 * env.rho * drag.cd_axial * jnp.pi * lt.diameter
-    return -(0.5 * stretched)[:, None] * (cn * abs_times(un) + ca * abs_times(ut))
+    return (0.5 * stretched)[:, None] * morison.drag(lt, env, u, tangent)
 
 
 def _fluid_inertia(lt, env, a, tangent, stretched):
     """Froude–Krylov and added-mass load of the water's acceleration ``a`` (n, 3)
     [m/s²] on one node from one adjacent element half: (n, 3) [N]."""
-    at = jnp.sum(a * tangent, axis=-1, keepdims=True) * tangent
-    an = a - at
-    ca_n = ca_t = 0.0
-    if lt.added_mass is not None:
-        ca_n, ca_t = lt.added_mass.ca_normal, lt.added_mass.ca_axial
-    return (env.rho * lt.area * 0.5 * stretched)[:, None] * ((1.0 + ca_n) * an + (1.0 + ca_t) * at)
+    return (0.5 * stretched)[:, None] * morison.fluid_inertia(lt, env, a, tangent)
 
 
 def _seabed(lt, env, r, v, node_len):
