@@ -15,7 +15,8 @@ import pytest
 import moorjax as mj
 from moorjax.cli import main
 from moorjax.dynamics import simulate
-from moorjax.dynamics.vector_field import _line_rate, line_groups, pack, vector_field
+from moorjax.dynamics.vector_field import _line_rate, pack, vector_field
+from moorjax.model.grouping import line_groups
 from moorjax.ensemble import StructureMismatchError, simulate_ensemble, stack, status
 from moorjax.ensemble.run import TRACES
 from moorjax.ensemble.store import load, run_chunked

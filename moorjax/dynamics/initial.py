@@ -30,7 +30,7 @@ from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
-from ..statics.system import body_forces, mooring_wrench
+from ..statics.system import line_statics_at, body_forces, mooring_wrench
 
 
 class Equilibrium(eqx.Module):
@@ -133,16 +133,6 @@ def catenary_state(scene, t0=0.0) -> Equilibrium:
                        jnp.zeros((len(scene.bodies), 6)) if scene.bodies else None)
 
 
-def _line_statics_at(scene, poses, t, inits):
-    """Each line's static solve with its fairleads where ``poses`` put them."""
-    zero = [jnp.zeros(6)] * len(scene.bodies)
-    lines = attach(scene.lines, scene.bodies, list(poses), zero)
-    # traced here, so no end-below-the-bed check: a free point resting on the seabed
-    # sinks to its contact penetration, carried by its lines' end-node contact
-    return tuple(solve_line_statics(ln, scene.env, t, init, throw=False)
-                 for ln, init in zip(lines, inits))
-
-
 def _states(sts):
     return tuple(s.state() for s in sts)
 
@@ -157,88 +147,89 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function
     theorem at the solution (see the end)."""
-    poses, inits, converged = _body_newton(_stop_gradient(scene_d), jax.lax.stop_gradient(t),
-                                           loads, tol, max_iterations)
+    poses, inits, converged, jac = _body_newton(_stop_gradient(scene_d), jax.lax.stop_gradient(t),
+                                                loads, tol, max_iterations)
     # dη/dθ = −J⁻¹ ∂G/∂θ at the solution G(η, θ) = 0: a Newton step whose value
-    # is exactly zero but whose derivative is that
+    # is exactly zero but whose derivative is that (J is the iteration's last
+    # Jacobian, at the solution; its own derivative does not enter since G = 0)
     nb = len(scene_d.bodies)
-
-    def imbalance(p, scene):
-        return (body_forces(scene, p, t, loads) + mooring_wrench(scene, p, t, inits)).ravel()
-
-    jac = jax.jacfwd(imbalance)(poses, _stop_gradient(scene_d)).reshape(6 * nb, 6 * nb)
-    delta = -jnp.linalg.solve(jac, imbalance(poses, scene_d)).reshape(nb, 6)
+    g = body_forces(scene_d, poses, t, loads) + mooring_wrench(scene_d, poses, t, inits)
+    delta = -jnp.linalg.solve(jac, g.ravel()).reshape(nb, 6)
     tangent = delta - jax.lax.stop_gradient(delta)
     poses = poses + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
-    st = _line_statics_at(scene_d, poses, t, inits)
+    st = line_statics_at(scene_d, poses, t, inits)
     lines_ok = jnp.stack([s.converged for s in st])
     state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
     return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
 
 
+# a Newton step is halved at most this often before the iteration gives up
+_BACKTRACKS = 6
+
+
 def _body_newton(scene, t, loads, tol, max_iterations):
+    """Damped, backtracking Newton on the bodies' force balance, as one loop whose
+    body solves the lines' statics once (warm, linearised for the Jacobian) at a
+    trial pose: accepted trials become the base of the next Newton step, rejected
+    ones halve the step. One traced copy of the warm line statics keeps the
+    compile small (XLA inlines every copy). Returns (poses, line states,
+    converged, Jacobian at the poses)."""
     nb = len(scene.bodies)
     n_dof = 6 * nb
+    eye = jnp.eye(n_dof).reshape((n_dof,) + (nb, 6))
 
-    def imbalance(poses, inits):
-        return body_forces(scene, poses, t, loads) + mooring_wrench(scene, poses, t, inits)
+    def evaluate(poses, inits):
+        def imbalance(p):
+            st = line_statics_at(scene, p, t, inits)
+            ends = [(s.force_a, s.force_b) for s in st]
+            w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))
+            ok = jnp.all(jnp.stack([s.converged for s in st]))
+            tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
+            return body_forces(scene, p, t, loads) + w, (_states(st), ok, tens)
 
-    def newton_parts(poses, inits):
-        g, jvp_fn = jax.linearize(lambda p: imbalance(p, inits), poses)
-        jac = jax.vmap(jvp_fn)(jnp.eye(n_dof).reshape((n_dof,) + poses.shape))
-        return g, jac.reshape(n_dof, n_dof).T
+        g, jvp_fn, (states, ok, tens) = jax.linearize(imbalance, poses, has_aux=True)
+        jac = jax.vmap(jvp_fn)(eye).reshape(n_dof, n_dof).T
+        return g, jac, states, ok, tens
 
     poses0 = jnp.zeros((nb, 6))
-    inits0 = _states(_line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
-    st0 = _line_statics_at(scene, poses0, t, inits0)
-    tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st0]))
-    scale = jnp.maximum(jnp.maximum(tens, jnp.max(jnp.abs(imbalance(poses0, inits0)))), 1.0)
+    inits0 = _states(line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
 
-    def newton_step(poses, inits, g, jac, size):
-        """A damped Newton step with backtracking: (poses, inits, admissible)."""
+    def newton_step(g, jac):
         step = jnp.linalg.solve(jac, -g.ravel()).reshape(nb, 6)
         # damp large rotations and translations (the line statics must stay reachable)
         big = jnp.maximum(jnp.maximum(jnp.max(jnp.abs(step[:, :3])) / 5.0,
                                       jnp.max(jnp.abs(step[:, 3:])) / 0.05), 1.0)
-
-        # backtracking: seabed contact makes the imbalance kinked, so a full
-        # Newton step can overshoot and cycle
-        def trial(c):
-            k, step, _, _, _, _ = c
-            poses_t = poses + step
-            new = _line_statics_at(scene, poses_t, t, inits)
-            ok = jnp.all(jnp.stack([s.converged for s in new]))
-            ends = [(s.force_a, s.force_b) for s in new]
-            w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses_t), ends))
-            g_t = body_forces(scene, poses_t, t, loads) + w
-            found = ok & (jnp.max(jnp.abs(g_t)) < size)
-            return k + 1, jnp.where(found, step, 0.5 * step), poses_t, _states(new), ok, found
-
-        c0 = (0, step / big, poses, inits, jnp.asarray(False), jnp.asarray(False))
-        _, _, poses_t, new, ok, _ = lax.while_loop(lambda c: (c[0] < 6) & ~c[5], trial, c0)
-        return poses_t, new, ok
+        return jnp.where(jnp.isfinite(step), step / big, 0.0)
 
     def iteration(c):
-        it, poses, inits, _, _ = c
-        g, jac = newton_parts(poses, inits)
-        finite = jnp.all(jnp.isfinite(g)) & jnp.all(jnp.isfinite(jac))
-        size = jnp.max(jnp.abs(g))
-        converged = finite & (size < tol * scale)
-        stop = ~finite | converged
-        safe_jac = jnp.where(finite, jac, jnp.eye(n_dof))
-        poses_t, new, ok = lax.cond(
-            stop, lambda: (poses, inits, jnp.asarray(False)),
-            lambda: newton_step(poses, inits, jnp.where(finite, g, 0.0), safe_jac, size))
-        take = ~stop & ok
-        poses = jnp.where(take, poses_t, poses)
-        inits = jax.tree_util.tree_map(lambda a, b: jnp.where(take, a, b), new, inits)
-        # stop at the last good poses when no trial step was admissible
-        return it + 1, poses, inits, stop | ~ok, converged
+        (k, newton_its, trial, base, inits, size, jac, step, scale, _, _) = c
+        g, jac_t, states, ok, tens = evaluate(trial, inits)
+        finite = jnp.all(jnp.isfinite(g)) & jnp.all(jnp.isfinite(jac_t))
+        size_t = jnp.max(jnp.abs(g))
+        first = newton_its == 0
+        # backtracking: seabed contact makes the imbalance kinked, so a full
+        # Newton step can overshoot and cycle; a trial is taken when its lines
+        # converged and it reduces the largest force
+        accept = ok & finite & (first | (size_t < size))
+        scale = jnp.where(first, jnp.maximum(jnp.maximum(tens, size_t), 1.0), scale)
+        base = jnp.where(accept, trial, base)
+        inits = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), states, inits)
+        size = jnp.where(accept, size_t, size)
+        jac = jnp.where(accept, jac_t, jac)
+        converged = accept & (size_t < tol * scale)
+        step = jnp.where(accept, newton_step(jnp.where(finite, g, 0.0), jac), 0.5 * step)
+        k = jnp.where(accept, 0, k + 1)
+        gave_up = (k >= _BACKTRACKS) | (first & ~accept)
+        newton_its = newton_its + accept
+        return (k, newton_its, base + step, base, inits, size, jac, step, scale,
+                converged | gave_up, converged)
 
-    c0 = (0, poses0, inits0, jnp.asarray(False), jnp.asarray(False))
-    _, poses, inits, _, converged = lax.while_loop(
-        lambda c: (c[0] < max_iterations) & ~c[3], iteration, c0)
-    return poses, inits, converged
+    zero = jnp.zeros((nb, 6))
+    c0 = (0, 0, poses0, poses0, inits0, jnp.inf, jnp.eye(n_dof), zero, 1.0,
+          jnp.asarray(False), jnp.asarray(False))
+    c = lax.while_loop(lambda c: (c[1] <= max_iterations) & ~c[9], iteration, c0)
+    _, _, _, poses, inits, _, jac, _, _, _, converged = c
+    return poses, inits, converged, jac
 
 
 def failed_lines(scene, eq: Equilibrium) -> list[str]:

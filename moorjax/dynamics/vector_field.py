@@ -23,12 +23,11 @@ lines' end accelerations are one linear solve, decided by the scene's structure
 
 from __future__ import annotations
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 
 from .._numerics import safe_norm
+from ..model.grouping import map_lines
 from ..model.line import LineState
 
 
@@ -78,21 +77,6 @@ def _line_rate(line, q, env, t):
     return line.element.state_rate(line, env, t, q)
 
 
-def _structure_key(line):
-    """Lines with equal keys can be stacked (labels aside)."""
-    canonical = dataclasses.replace(line, label="")
-    leaves, treedef = jax.tree_util.tree_flatten(canonical)
-    return treedef, tuple((jnp.shape(x), jnp.result_type(x)) for x in leaves)
-
-
-def line_groups(lines) -> list[list[int]]:
-    """Indices of the lines, grouped by structure (first-appearance order)."""
-    groups: dict = {}
-    for i, line in enumerate(lines):
-        groups.setdefault(_structure_key(line), []).append(i)
-    return list(groups.values())
-
-
 def vector_field(t, y, scene):
     """dy/dt: (velocity, acceleration) of every line's free nodes, then each body's rate."""
     if inertial_ends(scene):
@@ -104,7 +88,7 @@ def vector_field(t, y, scene):
         return out
     from ..body.coupling import mooring_wrenches
 
-    ends = [_end_forces(line, q, scene.env, t) for line, q in zip(lines, y_lines)]
+    ends = _grouped(_end_forces, t, y_lines, lines, scene.env)
     wrenches = mooring_wrenches(scene.lines, scene.bodies, poses, ends)
     rates = tuple(body.rate(t, z, w, scene.env) for body, z, w in
                   zip(scene.bodies, y[len(scene.lines):], wrenches))
@@ -143,19 +127,7 @@ def _line_rates(t, y, lines, env):
 
 def _grouped(fn, t, y, lines, env):
     """``fn(line, q, env, t)`` for every line, one ``vmap`` per group of equal structure."""
-    out = [None] * len(lines)
-    for idx in line_groups(lines):
-        if len(idx) == 1:
-            i = idx[0]
-            out[i] = fn(lines[i], y[i], env, t)
-            continue
-        members = [dataclasses.replace(lines[i], label="") for i in idx]
-        stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *members)
-        q = jnp.stack([y[i] for i in idx])
-        res = jax.vmap(fn, in_axes=(0, 0, None, None))(stacked, q, env, t)
-        for k, i in enumerate(idx):
-            out[i] = jax.tree_util.tree_map(lambda x, k=k: x[k], res)
-    return tuple(out)
+    return map_lines(lambda line, q: fn(line, q, env, t), lines, y)
 
 
 def end_outputs(t, y, scene, with_nodes: bool = False):

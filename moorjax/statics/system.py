@@ -25,6 +25,7 @@ from jaxtyping import Array
 
 from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
+from ..model.grouping import map_lines
 from .exact import catenary_eligible, catenary_solves
 from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, check_geometry, element_core
 
@@ -64,7 +65,10 @@ def _attached(scene, poses):
     return attach(scene.lines, scene.bodies, list(poses), [jnp.zeros(6)] * len(scene.bodies))
 
 
-def _line_statics_at(scene, poses, t, inits=None, methods=None):
+def line_statics_at(scene, poses, t, inits=None, methods=None):
+    """Each line's static solve (``LineStatics``) with its fairleads where the
+    bodies' ``poses`` (n_bodies, 6) put them, each started from ``inits`` (line
+    states, or None: the element's own first guess), by ``methods``."""
     lines = _attached(scene, poses)
     inits = (None,) * len(lines) if inits is None else inits
     methods = ("fem",) * len(lines) if methods is None else methods
@@ -73,12 +77,22 @@ def _line_statics_at(scene, poses, t, inits=None, methods=None):
     # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
     # a failed line solve is reported by ``converged``
 
-    def one(ln, init, method):
-        if method == "catenary":
-            return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
-        return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
+    def solve(method):
+        def one(ln, init):
+            if method == "catenary":
+                return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
+            return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
+        return one
 
-    return tuple(one(*x) for x in zip(lines, inits, methods))
+    # lines of one structure (and method) solve as one vmapped call: one traced
+    # copy of the solve per structure, not per line (moorjax.model.grouping)
+    out = [None] * len(lines)
+    for method in set(methods):
+        idx = [i for i, m in enumerate(methods) if m == method]
+        for i, st in zip(idx, map_lines(solve(method), [lines[i] for i in idx],
+                                        [inits[i] for i in idx])):
+            out[i] = st
+    return tuple(out)
 
 
 def mooring_wrench(scene, poses, t=0.0, inits=None, methods=None) -> Array:
@@ -89,7 +103,7 @@ def mooring_wrench(scene, poses, t=0.0, inits=None, methods=None) -> Array:
     lines resting on the seabed).
     """
     poses = jnp.asarray(poses, dtype=float).reshape(len(scene.bodies), 6)
-    st = _line_statics_at(scene, poses, t, inits, methods)
+    st = line_statics_at(scene, poses, t, inits, methods)
     ends = [(s.force_a, s.force_b) for s in st]
     return jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(poses), ends))
 
@@ -204,14 +218,14 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
     scale = None
     converged = False
     it = 0
-    inits = tuple(s.state() for s in _line_statics_at(scene, poses, t, None, methods))
+    inits = tuple(s.state() for s in line_statics_at(scene, poses, t, None, methods))
     for it in range(1, max_iterations + 1):
         g, jac = _newton_parts(scene, poses, t, bool(loads), inits, methods)
         g_np = np.asarray(g)
         if not np.all(np.isfinite(g_np)):
             break
         if scale is None:
-            st = _line_statics_at(scene, poses, t, inits, methods)
+            st = line_statics_at(scene, poses, t, inits, methods)
             tens = max(float(jnp.max(jnp.abs(s.tensions))) for s in st)
             scale = max(tens, float(np.max(np.abs(g_np))), 1.0)
         # moments are compared on the same scale times a unit lever arm
@@ -227,11 +241,11 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
         size = np.max(np.abs(g_np))
         for _ in range(_HALVINGS):
             trial = poses + jnp.asarray(step)
-            new = _line_statics_at(scene, trial, t, inits, methods)
+            new = line_statics_at(scene, trial, t, inits, methods)
             if not all(bool(x.converged) for x in new):
                 # a slack weightless line may not settle from its last shape but
                 # does from the catenary guess
-                cold = _line_statics_at(scene, trial, t, None, methods)
+                cold = line_statics_at(scene, trial, t, None, methods)
                 new = tuple(x if bool(x.converged) else c for x, c in zip(new, cold))
             ok = all(bool(x.converged) for x in new)
             if ok:
@@ -247,7 +261,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
             break
         poses = trial
         inits = tuple(x.state() for x in new)
-    st = _line_statics_at(scene, poses, t, inits, methods)
+    st = line_statics_at(scene, poses, t, inits, methods)
     wrench = mooring_wrench(scene, poses, t, inits, methods)
     residual = body_forces(scene, poses, t, loads) + wrench
     lines_ok = all(bool(s.converged) for s in st)
@@ -287,7 +301,7 @@ def offset_curve(scene, offsets, dof: int = 0, body: int = 0, t=0.0) -> Array:
 
     def solve(x, inits):
         p = jnp.zeros((nb, 6)).at[body, dof].set(x)
-        st = _line_statics_at(scene, p, t, inits)
+        st = line_statics_at(scene, p, t, inits)
         bad = [scene.lines[i].label for i, s in enumerate(st) if not bool(s.converged)]
         if bad:
             raise RuntimeError(f"offset curve: static solve of line(s) {', '.join(bad)} failed at "
