@@ -333,3 +333,18 @@ def test_building_a_scene_and_checking_it_run_no_eager_operations():
     assert built == []
     _, built = _programs_built(lambda: check_geometry(scene, 0.0))
     assert built == ["jit(_end_positions)"]
+
+
+def test_a_body_scene_is_built_and_checked_with_few_programs():
+    """A free body's constructor checks its mass matrix and equinox reads its
+    hydrostatic stiffness: one small program each (before: 117 eager operations
+    for the three-chain buoy deck); its geometry check attaches the lines at
+    rest in one more."""
+    from moorjax.dynamics.initial import check_geometry
+    from moorjax.io import build_scene, read_deck
+
+    deck = read_deck(os.path.join(ROOT, "tests", "data", "free_body_buoy.dat"))
+    scene, built = _programs_built(lambda: build_scene(deck))
+    assert sorted(built) == ["jit(_hydrostatic)", "jit(_rest_mass_matrix)"], built
+    _, built = _programs_built(lambda: check_geometry(scene, 0.0))
+    assert sorted(set(built)) == ["jit(_attached_at_rest)", "jit(_end_positions)"], built

@@ -47,7 +47,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._checks import check_finite, check_nonnegative
-from .._numerics import abs_times
+from .._numerics import abs_times, as_float
 from .base import AbstractBody
 
 
@@ -88,12 +88,31 @@ def _translate(mass3, r) -> Array:
 
 
 def _vec(value, n, name, unit):
-    v = jnp.asarray(value, dtype=float)
-    v = jnp.broadcast_to(v, (n,)) if v.ndim == 0 else v
+    v = as_float(value)
+    if v.ndim == 0:
+        v = as_float(np.broadcast_to(np.asarray(v), (n,))) if is_concrete(v) else jnp.broadcast_to(v, (n,))
     if v.shape != (n,):
         raise ValueError(f"{name} must be a scalar or have {n} values [{unit}], got shape {v.shape}")
     check_finite(v, name, unit)
     return v
+
+
+def is_concrete(x) -> bool:
+    return not isinstance(x, jax.core.Tracer)
+
+
+@eqx.filter_jit
+def _rest_mass_matrix(body):
+    """The mass matrix at η = 0 (one small program for the constructor's check,
+    not one eager XLA operation per array operation)."""
+    return body.mass_matrix(jnp.zeros(6))
+
+
+@eqx.filter_jit
+def _hydrostatic(body):
+    """−∂(weight and buoyancy)/∂η at η = 0 (equinox evaluates the property when
+    a body is built: one small program)."""
+    return -jax.jacfwd(body.gravity_wrench)(jnp.zeros(6))
 
 
 class SubmergedBody(AbstractBody):
@@ -141,13 +160,13 @@ class SubmergedBody(AbstractBody):
                  rho=1025.0, g=9.80665, current=None, label="body"):
         check_nonnegative(mass, f"body {label!r} mass", "kg")
         check_nonnegative(volume, f"body {label!r} volume", "m³")
-        self.mass = jnp.asarray(mass, dtype=float)
+        self.mass = as_float(mass)
         self.origin = _vec(origin, 3, f"body {label!r} reference point", "m")
         self.orientation = _vec(orientation, 3, f"body {label!r} orientation", "rad")
         self.cg = _vec(cg, 3, f"body {label!r} centre of gravity", "m")
         self.inertia = _vec(inertia, 3, f"body {label!r} moments of inertia", "kg·m²")
         check_nonnegative(self.inertia, f"body {label!r} moments of inertia", "kg·m²")
-        self.volume = jnp.asarray(volume, dtype=float)
+        self.volume = as_float(volume)
         self.cb = self.cg if cb is None else _vec(cb, 3, f"body {label!r} centre of buoyancy", "m")
         self.cda = _vec(cda, 6, f"body {label!r} CdA", "m²")
         check_nonnegative(self.cda, f"body {label!r} CdA", "m²")
@@ -155,19 +174,19 @@ class SubmergedBody(AbstractBody):
         check_nonnegative(self.ca, f"body {label!r} Ca", "-")
         if fixtures is None:
             fixtures = (np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros((0, 3, 3)))
-        pts, fm, fv, fi = (jnp.asarray(x, dtype=float) for x in fixtures)
-        k = pts.reshape(-1, 3).shape[0]
-        self.fixture_points = pts.reshape(k, 3)
-        self.fixture_mass = fm.reshape(k)
-        self.fixture_volume = fv.reshape(k)
-        self.fixture_inertia = fi.reshape(k, 3, 3)
+        pts, fm, fv, fi = fixtures
+        k = int(np.size(pts)) // 3
+        self.fixture_points = as_float(pts, (k, 3))
+        self.fixture_mass = as_float(fm, (k,))
+        self.fixture_volume = as_float(fv, (k,))
+        self.fixture_inertia = as_float(fi, (k, 3, 3))
         check_nonnegative(self.fixture_mass, f"body {label!r} fixture masses", "kg")
-        self.rho = jnp.asarray(rho, dtype=float)
-        self.g = jnp.asarray(g, dtype=float)
+        self.rho = as_float(rho)
+        self.g = as_float(g)
         self.current = current
         self.label = str(label)
         try:
-            m6 = np.asarray(self.mass_matrix(jnp.zeros(6)))
+            m6 = np.asarray(_rest_mass_matrix(self))
         except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError):
             return  # traced parameters (jax.grad, vmap): no check
         eig = np.linalg.eigvalsh(0.5 * (m6 + m6.T))
@@ -277,7 +296,7 @@ class SubmergedBody(AbstractBody):
     def hydrostatic(self) -> Array:
         """(6, 6) restoring stiffness −∂(weight and buoyancy)/∂η at η = 0 (no waterplane:
         only the moments of weight and buoyancy about the reference point)."""
-        return -jax.jacfwd(self.gravity_wrench)(jnp.zeros(6))
+        return _hydrostatic(self)
 
     def energy(self, z) -> Array:
         """Kinetic energy ½[v, ω]ᵀ·M·[v, ω] plus the potential of weight and buoyancy [J]."""

@@ -63,8 +63,14 @@ def _lines_at_rest(scene):
     """The scene's lines with their fairleads where the bodies are at η = 0, at rest."""
     if not scene.bodies:
         return scene.lines
-    zero = [jnp.zeros(6)] * len(scene.bodies)
-    return attach(scene.lines, scene.bodies, zero, zero)
+    return _attached_at_rest(scene.lines, scene.bodies)
+
+
+@eqx.filter_jit
+def _attached_at_rest(lines, bodies):
+    """(one small program, not an eager XLA operation per array operation)"""
+    zero = [jnp.zeros(6)] * len(bodies)
+    return attach(lines, bodies, zero, zero)
 
 
 def start_layout(scene) -> tuple:

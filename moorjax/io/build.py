@@ -304,8 +304,9 @@ def _end_node_inertia(deck: Deck, point_id: int, lines, rho: float) -> np.ndarra
         for end, other in (("a", dl.point_b), ("b", dl.point_a)):
             if getattr(dl, f"point_{end}") != point_id:
                 continue
-            lt = line.line_type
-            half = 0.5 * float(line.segment_length)
+            # on the host (NumPy leaves): no XLA operation
+            lt = jax.tree_util.tree_map(np.asarray, line.line_type)
+            half = 0.5 * float(line.length) / line.n_segments
             out += float(lt.mass_per_length) * half * np.eye(3)
             if lt.added_mass is not None:
                 chord = np.subtract(deck.point_position(other), deck.point_position(point_id))
