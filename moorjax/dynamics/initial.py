@@ -26,6 +26,7 @@ import numpy as np
 from jax import lax
 from jaxtyping import Array
 
+from .._cache import StoredProgram
 from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
@@ -148,7 +149,7 @@ def _stop_gradient(tree):
     return eqx.combine(jax.lax.stop_gradient(diff), static)
 
 
-@eqx.filter_jit
+@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
 def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function

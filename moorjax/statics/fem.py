@@ -381,7 +381,7 @@ def _implicit_jvp(primals, tangents):
     _, b_dot = eqx.filter_jvp(lambda ln, e, tt: _residual(ln, e, tt)(r_free, None), (line, env, t),
                               (t_line, t_env, t_t))
     op = lx.JacobianLinearOperator(_residual(line, env, t), r_free)
-    r_dot = -lx.linear_solve(op, b_dot, MinimumNorm()).value
+    r_dot = -lx.linear_solve(op, b_dot, MinimumNorm(), throw=False).value
     return r_free, r_dot
 
 
