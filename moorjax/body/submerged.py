@@ -90,15 +90,12 @@ def _translate(mass3, r) -> Array:
 def _vec(value, n, name, unit):
     v = as_float(value)
     if v.ndim == 0:
-        v = as_float(np.broadcast_to(np.asarray(v), (n,))) if is_concrete(v) else jnp.broadcast_to(v, (n,))
+        v = (jnp.broadcast_to(v, (n,)) if isinstance(v, jax.core.Tracer)
+             else as_float(np.broadcast_to(np.asarray(v), (n,))))
     if v.shape != (n,):
         raise ValueError(f"{name} must be a scalar or have {n} values [{unit}], got shape {v.shape}")
     check_finite(v, name, unit)
     return v
-
-
-def is_concrete(x) -> bool:
-    return not isinstance(x, jax.core.Tracer)
 
 
 @eqx.filter_jit

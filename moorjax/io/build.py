@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import warnings
 
+import equinox as eqx
 import jax
 import numpy as np
 
@@ -305,8 +306,9 @@ def _end_node_inertia(deck: Deck, point_id: int, lines, rho: float) -> np.ndarra
             if getattr(dl, f"point_{end}") != point_id:
                 continue
             # on the host (NumPy leaves): no XLA operation
-            lt = jax.tree_util.tree_map(np.asarray, line.line_type)
-            half = 0.5 * float(line.length) / line.n_segments
+            host = jax.tree_util.tree_map(lambda x: np.asarray(x) if eqx.is_array(x) else x, line)
+            lt = host.line_type
+            half = 0.5 * float(host.segment_length)
             out += float(lt.mass_per_length) * half * np.eye(3)
             if lt.added_mass is not None:
                 chord = np.subtract(deck.point_position(other), deck.point_position(point_id))

@@ -77,22 +77,14 @@ def line_statics_at(scene, poses, t, inits=None, methods=None):
     # its contact penetration, carried by its lines' end-node contact (as in MoorDyn);
     # a failed line solve is reported by ``converged``
 
-    def solve(method):
-        def one(ln, init):
-            if method == "catenary":
-                return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
-            return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
-        return one
+    def one(ln, init, method):
+        if method == "catenary":
+            return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
+        return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
 
     # lines of one structure (and method) solve as one vmapped call: one traced
     # copy of the solve per structure, not per line (moorjax.model.grouping)
-    out = [None] * len(lines)
-    for method in set(methods):
-        idx = [i for i, m in enumerate(methods) if m == method]
-        for i, st in zip(idx, map_lines(solve(method), [lines[i] for i in idx],
-                                        [inits[i] for i in idx])):
-            out[i] = st
-    return tuple(out)
+    return map_lines(one, lines, inits, methods)
 
 
 def mooring_wrench(scene, poses, t=0.0, inits=None, methods=None) -> Array:
