@@ -16,6 +16,7 @@ The folder may be deleted at any time; JAX refills it.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import weakref
 
@@ -142,7 +143,11 @@ def _source_hash() -> str:
     return _SOURCE[0]
 
 
+@functools.cache
 def _versions() -> str:
+    """The versions of the packages behind a stored program, read once per
+    process (``importlib.metadata`` scans the installed distributions: about
+    12 ms a call, which every run paid before its first step)."""
     from importlib import metadata
 
     out = []
@@ -189,6 +194,23 @@ def _describe(treedef, out: list) -> bool:
     return True
 
 
+@functools.lru_cache(maxsize=256)
+def _described(treedef):
+    """:func:`_describe` of one tree structure as a tuple (``None``: no stable
+    text), kept per structure: a run's arguments have hundreds of nodes, and
+    every call of a stored program computes its key."""
+    out = []
+    return tuple(out) if _describe(treedef, out) else None
+
+
+def _described_safe(treedef):
+    try:
+        return _described(treedef)
+    except TypeError:  # a node's static data is not hashable: describe it afresh
+        out = []
+        return tuple(out) if _describe(treedef, out) else None
+
+
 def _can_serialise() -> bool:
     """``jax.export`` serialises with the ``flatbuffers`` package."""
     import importlib.util
@@ -222,15 +244,17 @@ class StoredProgram:
 
         import jax
 
-        parts = []
-        if not _describe(jax.tree_util.tree_structure(static), parts):
+        static_part = _described_safe(jax.tree_util.tree_structure(static))
+        if static_part is None:
             return None
         static_leaves = [repr(x) for x in jax.tree_util.tree_leaves(static)]
         if any(" at 0x" in s for s in static_leaves) or not all(
                 _trusted(type(x)) for x in jax.tree_util.tree_leaves(static)) or not _trusted(self.fn):
             return None
-        if not _describe(in_tree, parts):
+        in_part = _described_safe(in_tree)
+        if in_part is None:
             return None
+        parts = [*static_part, *in_part]
         avals = [f"{x.shape}{x.dtype}{int(bool(getattr(x, 'weak_type', False)))}" for x in leaves]
         text = "\n".join([f"{self.fn.__module__}.{self.fn.__qualname__}", _source_hash(),
                           _versions(), jax.default_backend(),
