@@ -12,7 +12,7 @@ standard deviation, and the number of steps.
   listed in the reference cost table ``moordyn_cost_error.csv``;
 - moorjax: kvaerno3, kvaerno5 and ros34pw2 (adaptive) at N = 10, 20, 40, 80 and
   tolerance pairs (rtol, atol [m]) = (1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)
-  (ros34pw2 also at (3e-6, 3e-5))
+  (ros34pw2 also at (3e-6, 3e-5) and (4e-4, 4e-3))
   (``atol_velocity`` = 100·atol m/s, moorjax's default); implicit_euler with
   fixed steps; heun with fixed steps at MoorDyn's RK2 stability limit for that N
   (and half of it);
@@ -63,6 +63,8 @@ from moorjax.examples import example_path  # noqa: E402
 TOLS = [(1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)]
 #: a tighter pair for ros34pw2 (its cheapest runs are at the default and looser)
 ROS_TIGHT = (3e-6, 3e-5)
+#: and a looser one (case B, N = 10: 0.82 % at 4e-4/4e-3, 2.6 % at 1e-3/1e-2)
+ROS_LOOSE = (4e-4, 4e-3)
 #: error levels of the cheapest-run summary (0.5 %: only N = 80 runs get there; the
 #: references are good to about 0.3 %, so 0.1 % is not reachable with them)
 LEVELS = (0.01, 0.005, 0.001)
@@ -92,6 +94,7 @@ QUICK = {
                       (10, "auto", (1e-5, 1e-4), None),
                       (10, "heun", None, 1.667e-3), (10, "ros34pw2", (1e-4, 1e-3), None),
                       (10, "ros34pw2", (1e-5, 1e-4), None), (20, "ros34pw2", (1e-4, 1e-3), None),
+                      (10, "ros34pw2", ROS_LOOSE, None),
                       (20, "implicit_euler", None, 2e-3)]},
 }
 
@@ -131,7 +134,7 @@ def _linear_plan(case, quick, table):
         return QUICK["moorjax"][case]
     runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5", "ros34pw2")
             for tol in TOLS]
-    runs += [(n, "ros34pw2", ROS_TIGHT, None) for n in NS]
+    runs += [(n, "ros34pw2", tol, None) for n in NS for tol in (ROS_TIGHT, ROS_LOOSE)]
     runs += [(n, "implicit_euler", None, dt) for n in (20, 40) for dt in (1e-3, 2e-3, 5e-3)]
     for n in NS:
         lim = rk2_limit(table, case, n)
