@@ -10,12 +10,22 @@ Measured on these draws at 10 elements:
   grounded); now 2 fail, both grounded lines whose touchdown is far sharper
   than an element (draw 47: catenary parameter H/w = 0.017 element lengths;
   draw 188: 1.25, which converges at 8, 12, 16 and 20 elements);
-- every line whose touchdown 80 linear segments resolve (the property test's
-  rule; none of them grounded) converges, worst error 4.3e-3 of its own
-  tension (suspended), 4.1e-4 taut; issue 13's 5e-4 is not met for suspended
-  lines;
-- grounded lines: median error 1.0e-2 of the largest tension, against 3.5e-2
-  for the linear element at 10 segments (both under-resolve the touchdown).
+- lines that do not rest on the bed (MoorPy's grounded length 0: suspended,
+  taut, near-straight and floating lines, and lines leaving an anchor on the
+  bed upwards; 102 of them) all converge, worst end-tension error 1.1e-6 of
+  its own tension: issue 13's 5e-4 at 10 elements holds for them;
+- lines with a grounded stretch do not meet it. Those whose catenary
+  parameter H/w is at least 3.75 element lengths (the property test's rule for
+  a touchdown that 80 linear segments resolve) converge with worst error
+  4.3e-3 (draw 71: 49 % of the line on the bed); an element that holds the
+  touchdown holds the kink of the line's curvature, which a cubic cannot
+  follow (more quadrature points change nothing: 12 points per element, worst
+  5.1e-3). All grounded lines: median error 1.0e-2 of the largest tension,
+  against 3.5e-2 for the linear element at 10 segments.
+
+(An earlier version of this test counted the grounded lines of the second
+class as "resolved" together with the first, and its notes called them
+suspended.)
 """
 
 from __future__ import annotations
@@ -54,12 +64,25 @@ def solved():
     return out
 
 
-def test_resolved_lines_converge_and_agree_with_moorpy(solved):
-    resolved = [(c, st) for c, st, _ in solved if _resolved(c, 80)]
-    assert len(resolved) > 100
-    failed = [i for i, (c, st) in enumerate(resolved) if not bool(st.converged)]
+def test_lines_off_the_bed_converge_and_agree_with_moorpy(solved):
+    """Issue 13's 5e-4 at 10 elements, for every line that does not rest on the bed."""
+    free = [(c, st) for c, st, _ in solved if c["oracle"][3] == 0.0]
+    assert len(free) > 90 and {c["regime"] for c, _ in free} >= {"suspended", "taut", "straight", "floating"}
+    failed = [i for i, (c, st) in enumerate(free) if not bool(st.converged)]
     assert failed == []
-    worst = max(_errors(c, st)[0] for c, st in resolved)
+    worst = max(_errors(c, st)[0] for c, st in free)
+    print(f"\n{len(free)} lines off the bed: worst end-tension error {worst:.2e}")
+    assert worst < 1e-5, worst
+
+
+def test_grounded_lines_with_a_gentle_touchdown_converge(solved):
+    """Grounded lines whose touchdown curvature spans several elements (H/w at
+    least 3.75 element lengths): all converge, within 5e-3 (not issue 13's 5e-4)."""
+    gentle = [(c, st) for c, st, _ in solved if c["oracle"][3] > 0.0 and _resolved(c, 80)]
+    assert len(gentle) > 10
+    assert all(bool(st.converged) for _, st in gentle)
+    worst = max(_errors(c, st)[0] for c, st in gentle)
+    print(f"\n{len(gentle)} grounded lines with H/w >= 3.75 elements: worst error {worst:.2e}")
     assert worst < 5e-3, worst
 
 
