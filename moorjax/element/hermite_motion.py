@@ -55,6 +55,7 @@ import equinox as eqx
 import jax
 import jax.lax as lax
 import jax.numpy as jnp
+import jax.scipy.linalg
 import numpy as np
 from jaxtyping import Array
 
@@ -147,10 +148,11 @@ class StrainTension(AbstractTension):
 
 # -- mass, forces, accelerations ----------------------------------------------
 
-def mass_matrix(line, env, dofs: HermiteDofs):
-    """Consistent mass (2n+2, 3, 2n+2, 3) [kg] on the unknowns (r_0, h·r'_0, r_1, …)."""
+def element_mass(line, env, dofs: HermiteDofs):
+    """Each element's consistent mass (n, 4, 4, 3, 3) [kg] on its unknowns
+    (r_k, h·r'_k, r_k+1, h·r'_k+1), with the added mass of its wet length."""
     lt = line.line_type
-    n, h = line.n_segments, line.segment_length
+    h = line.segment_length
     _, d1, _, _ = element_fields(line, dofs)
     eye = jnp.eye(3)
     mu = lt.mass_per_length * jnp.broadcast_to(eye, d1.shape[:-1] + (3, 3))
@@ -161,11 +163,39 @@ def mass_matrix(line, env, dofs: HermiteDofs):
         am = lt.added_mass
         mu = mu + env.rho * lt.area * stretch[..., None, None] * (
             am.ca_normal * (eye - tt) + am.ca_axial * tt)
-    me = jnp.einsum("aq,bq,q,nqij->nabij", H, H, WQ * h, mu)
-    idx = 2 * np.arange(n)[:, None] + np.arange(4)[None, :]
-    m = jnp.zeros((2 * n + 2, 2 * n + 2, 3, 3))
+    return jnp.einsum("aq,bq,q,nqij->nabij", H, H, WQ * h, mu)
+
+
+def _element_unknowns(n):
+    """(n, 4) indices of each element's unknowns in the interleaved 2n+2."""
+    return 2 * np.arange(n)[:, None] + np.arange(4)[None, :]
+
+
+def _assemble(me):
+    """The dense mass matrix ((2n+2)·3, (2n+2)·3) of the element blocks."""
+    n = me.shape[0]
+    idx = _element_unknowns(n)
+    m = jnp.zeros((2 * n + 2, 2 * n + 2, 3, 3), me.dtype)
     m = m.at[idx[:, :, None], idx[:, None, :]].add(me)
-    return jnp.transpose(m, (0, 2, 1, 3))
+    return jnp.transpose(m, (0, 2, 1, 3)).reshape(3 * (2 * n + 2), 3 * (2 * n + 2))
+
+
+def _mass_apply(me, x):
+    """M·x for x ((2n+2)·3, c) from the element blocks, O(n): its derivative
+    carries the blocks' tangents, not a dense matrix's (forward mode through a
+    dense assembly cost a (2n+2)²·9 tangent per seed: most of a Hermite step's
+    Jacobian)."""
+    n = me.shape[0]
+    idx = _element_unknowns(n)
+    xs = x.reshape(2 * n + 2, 3, -1)
+    ye = jnp.einsum("nabij,nbjc->naic", me, xs[idx])
+    return jnp.zeros_like(xs).at[idx].add(ye).reshape(x.shape)
+
+
+def mass_matrix(line, env, dofs: HermiteDofs):
+    """Consistent mass (2n+2, 3, 2n+2, 3) [kg] on the unknowns (r_0, h·r'_0, r_1, …)."""
+    n = line.n_segments
+    return _assemble(element_mass(line, env, dofs)).reshape(2 * n + 2, 3, 2 * n + 2, 3)
 
 
 def _nodes(line, t, q):
@@ -191,10 +221,11 @@ def _partition(n):
 
 def dynamics(line, env, t, q):
     """Accelerations (2n+2, 3) of all unknowns (interleaved; the ends' are their
-    paths'), the generalised forces (2n+2, 3), the mass matrix, the field, and
-    S = M_ff⁻¹M_fp (free unknowns × 6): how the free accelerations fall with the
-    ends' (end A's, end B's) accelerations beyond their paths' (one factorisation
-    serves both)."""
+    paths'), the generalised forces (2n+2, 3), the element masses (n, 4, 4, 3,
+    3), the mass matrix's columns of the prescribed unknowns M[:, p] ((2n+2)·3,
+    6), the field, and S = M_ff⁻¹M_fp (free unknowns × 6): how the free
+    accelerations fall with the ends' (end A's, end B's) accelerations beyond
+    their paths' (one factorisation serves both)."""
     n, h = line.n_segments, line.segment_length
     u, ud = _nodes(line, t, q)
     dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
@@ -202,22 +233,27 @@ def dynamics(line, env, t, q):
     vel = HermiteDofs(r=ud[0::2], dr=ud[1::2] / h, lam=dofs.lam)
     force, moment = generalized_forces(line, env, dofs, vel, t, tension)
     f = jnp.zeros((2 * n + 2, 3)).at[0::2].set(force).at[1::2].set(moment / h)
-    m = mass_matrix(line, env, dofs)
+    me = element_mass(line, env, dofs)
     size = 3 * (2 * n + 2)
-    m2 = m.reshape(size, size)
     fi, pi = _partition(n)
     a_p = jnp.concatenate([line.end_a.acceleration(t), line.end_b.acceleration(t)])
-    m_fp = m2[np.ix_(fi, pi)]
+    m_cp = _mass_apply(me, jnp.zeros((size, 6), me.dtype).at[pi, np.arange(6)].set(1.0))  # M[:, pi]
+    m_fp = m_cp[fi]
     rhs = f.reshape(-1)[fi] - m_fp @ a_p
     # one solve for the accelerations and S = M_ff⁻¹·M_fp (how the free unknowns
     # follow the ends' accelerations); a clamped slope accelerates along its clamp only
     cols = jnp.concatenate([rhs[:, None], m_fp], axis=1)
     clamps = clamped_slopes(line, t)
-    sol = (_clamped_solve(m2[np.ix_(fi, fi)], cols, fi, clamps) if clamps
-           else jnp.linalg.solve(m2[np.ix_(fi, fi)], cols))
+    if clamps:
+        sol = _clamped_solve(_assemble(me)[np.ix_(fi, fi)], cols, fi, clamps)
+    else:
+        def m_ff(x):  # M_ff·x through the element blocks
+            return _mass_apply(me, jnp.zeros((size, x.shape[1]), x.dtype).at[fi].set(x))[fi]
+
+        sol = _spd_solve(m_ff, _assemble(lax.stop_gradient(me))[np.ix_(fi, fi)], cols)
     a_f, s = sol[:, 0], sol[:, 1:]
     a = jnp.zeros(size).at[fi].set(a_f).at[pi].set(a_p).reshape(2 * n + 2, 3)
-    return a, f, m2, dofs, tension, s
+    return a, f, me, m_cp, dofs, tension, s
 
 
 def _clamped_solve(m_ff, rhs, fi, clamps):
@@ -234,8 +270,21 @@ def _clamped_solve(m_ff, rhs, fi, clamps):
     for pos, d in held.values():
         basis.append(jnp.zeros((k, 1)).at[pos, 0].set(d))
     b = jnp.concatenate(basis, axis=1)
-    a_r = jnp.linalg.solve(b.T @ m_ff @ b, b.T @ rhs)
+    m_r = b.T @ m_ff @ b
+    a_r = _spd_solve(lambda x: m_r @ x, lax.stop_gradient(m_r), b.T @ rhs)
     return b @ a_r
+
+
+def _spd_solve(matvec, m, rhs):
+    """M⁻¹·rhs (k, c) for a symmetric positive definite mass matrix: ``matvec``
+    applies M (differentiable), ``m`` (k, k) is M's value (not differentiated)
+    for a Cholesky factorisation. No pivots: an LU solve's row permutation is
+    a sequential loop of k steps on CPU. Derivatives as ``jnp.linalg.solve``'s,
+    d(M⁻¹b) = M⁻¹(db − dM·M⁻¹b), through ``lax.custom_linear_solve``: the
+    factorisation is never differentiated."""
+    factor = jax.scipy.linalg.cho_factor(m)
+    solve = lambda _, b: jax.scipy.linalg.cho_solve(factor, b)  # noqa: E731
+    return lax.custom_linear_solve(matvec, rhs, solve, symmetric=True)
 
 
 def state_rate(line, env, t, q):
@@ -246,15 +295,15 @@ def state_rate(line, env, t, q):
 def end_forces(line, env, t, q):
     """Forces (3,), (3,) [N] on the end points: the generalised force on each end
     node minus its consistent inertia (→ the end tension as elements shrink)."""
-    a, f, m2, *_ = dynamics(line, env, t, q)
-    return _net_end_forces(f, m2, a, line.n_segments)
+    a, f, me, *_ = dynamics(line, env, t, q)
+    return _net_end_forces(f, me, a, line.n_segments)
 
 
-def _net_end_forces(f, m2, a, n):
+def _net_end_forces(f, me, a, n):
     """End A's and end B's forces (3,) [N]: the generalised forces on their
     positions (unknowns 0 and 2n of the interleaved 2n+2) minus their consistent
-    inertia M·a."""
-    net = (f.reshape(-1) - m2 @ a.reshape(-1)).reshape(2 * n + 2, 3)
+    inertia M·a (``me``: the element masses)."""
+    net = (f.reshape(-1) - _mass_apply(me, a.reshape(-1, 1))[:, 0]).reshape(2 * n + 2, 3)
     return net[0], net[2 * n]
 
 
@@ -282,11 +331,11 @@ def end_response(line, env, t, q):
         force_gain: (2, 3, 6) ∂forces/∂a_e = −M_e [kg].
     """
     n = line.n_segments
-    a, f, m2, _, _, s = dynamics(line, env, t, q)
+    a, f, me, m_cp, _, _, s = dynamics(line, env, t, q)
     fi, pi = _partition(n)
-    forces = jnp.stack(_net_end_forces(f, m2, a, n))
+    forces = jnp.stack(_net_end_forces(f, me, a, n))
     da = jnp.zeros((3 * (2 * n + 2), 6)).at[fi].set(-s).at[pi].set(jnp.eye(6))
-    m_e = m2[np.ix_(pi, pi)] - m2[np.ix_(pi, fi)] @ s
+    m_e = m_cp[pi] - m_cp[fi].T @ s  # M_pp − M_pf·S (M symmetric)
     da = da.reshape(2 * n + 2, 3, 6)
     gain = jnp.concatenate([da[2:2 * n:2], da[1::2]], axis=0)  # the rate's acceleration rows
     rate_gain = jnp.concatenate([jnp.zeros_like(gain), gain], axis=1)
