@@ -86,14 +86,15 @@ def start_layout(scene) -> tuple:
 
 
 def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
-                      max_iterations: int = 50) -> Equilibrium:
+                      max_iterations: int = 200) -> Equilibrium:
     """The static equilibrium of ``scene`` at ``t0`` as a start (see the module notes).
 
     Args:
         loads: with bodies, include their mean external loads (mean wind,
             current, wave drift); else hydrostatics and weights only.
         tol, max_iterations: the bodies' Newton iteration (relative force
-            tolerance on the scale of the lines' tensions; iteration limit).
+            tolerance on the scale of the lines' tensions; iteration limit, as
+            :func:`moorjax.statics.solve_system_statics`'s).
     """
     if not scene.bodies:
         sts = [solve_line_statics(line, scene.env, t0, throw=False) for line in scene.lines]
