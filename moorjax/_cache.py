@@ -194,21 +194,23 @@ def _describe(treedef, out: list) -> bool:
     return True
 
 
-@functools.lru_cache(maxsize=256)
-def _described(treedef):
-    """:func:`_describe` of one tree structure as a tuple (``None``: no stable
-    text), kept per structure: a run's arguments have hundreds of nodes, and
-    every call of a stored program computes its key."""
+def _text_of(treedef):
+    """:func:`_describe` of one tree structure as a tuple (``None``: no stable text)."""
     out = []
     return tuple(out) if _describe(treedef, out) else None
 
 
-def _described_safe(treedef):
+_cached_text_of = functools.lru_cache(maxsize=256)(_text_of)
+
+
+def _described(treedef):
+    """:func:`_text_of`, kept per structure: a run's arguments have hundreds of
+    nodes, and every call of a stored program computes its key. A structure
+    whose static data is not hashable is described afresh."""
     try:
-        return _described(treedef)
-    except TypeError:  # a node's static data is not hashable: describe it afresh
-        out = []
-        return tuple(out) if _describe(treedef, out) else None
+        return _cached_text_of(treedef)
+    except TypeError:
+        return _text_of(treedef)
 
 
 def _can_serialise() -> bool:
@@ -244,14 +246,14 @@ class StoredProgram:
 
         import jax
 
-        static_part = _described_safe(jax.tree_util.tree_structure(static))
+        static_part = _described(jax.tree_util.tree_structure(static))
         if static_part is None:
             return None
         static_leaves = [repr(x) for x in jax.tree_util.tree_leaves(static)]
         if any(" at 0x" in s for s in static_leaves) or not all(
                 _trusted(type(x)) for x in jax.tree_util.tree_leaves(static)) or not _trusted(self.fn):
             return None
-        in_part = _described_safe(in_tree)
+        in_part = _described(in_tree)
         if in_part is None:
             return None
         parts = [*static_part, *in_part]

@@ -31,7 +31,7 @@ from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
-from ..statics.system import line_statics_at, body_forces, mooring_wrench
+from ..statics.system import MAX_ITERATIONS, body_forces, line_statics_at, mooring_wrench
 
 
 class Equilibrium(eqx.Module):
@@ -86,7 +86,7 @@ def start_layout(scene) -> tuple:
 
 
 def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
-                      max_iterations: int = 200) -> Equilibrium:
+                      max_iterations: int = MAX_ITERATIONS) -> Equilibrium:
     """The static equilibrium of ``scene`` at ``t0`` as a start (see the module notes).
 
     Args:

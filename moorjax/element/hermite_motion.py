@@ -192,12 +192,6 @@ def _mass_apply(me, x):
     return jnp.zeros_like(xs).at[idx].add(ye).reshape(x.shape)
 
 
-def mass_matrix(line, env, dofs: HermiteDofs):
-    """Consistent mass (2n+2, 3, 2n+2, 3) [kg] on the unknowns (r_0, h·r'_0, r_1, …)."""
-    n = line.n_segments
-    return _assemble(element_mass(line, env, dofs)).reshape(2 * n + 2, 3, 2 * n + 2, 3)
-
-
 def _nodes(line, t, q):
     """All unknowns (2n+2, 3) interleaved [r_0, d_0, r_1, d_1, …] and their rates."""
     n = line.n_segments

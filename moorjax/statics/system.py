@@ -118,8 +118,16 @@ def _newton_parts(scene, poses, t, loads, inits, methods):
     return g, jac
 
 
+#: Newton iterations the bodies' statics allow by default (here and in
+#: :func:`moorjax.dynamics.initial.equilibrium_state`): where a body or point is
+#: held only by a slack line, the regularised steps move it a bounded distance
+#: each; MoorDyn's ``seafloor.txt`` point sliding 16 m down a frictionless slope
+#: took 105 iterations on one machine, under 50 on another
+MAX_ITERATIONS = 200
+
+
 def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: float = 1e-6,
-                         max_iterations: int = 200, throw: bool = True,
+                         max_iterations: int = MAX_ITERATIONS, throw: bool = True,
                          method: str = "fem") -> SystemStatics:
     """Equilibrium poses of the scene's bodies and the lines' static shapes.
 
@@ -131,11 +139,7 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         init: (n_bodies, 6) starting poses (default zero).
         tol: relative force tolerance, on the scale of the lines' tensions and
             the bodies' loads.
-        max_iterations: Newton iterations allowed (default 200: where a body
-            or point is held only by a slack line, the regularised steps move
-            it a bounded distance each; MoorDyn's ``seafloor.txt`` point sliding
-            16 m down a frictionless slope took 105 on one machine, under 50 on
-            another).
+        max_iterations: Newton iterations allowed (:data:`MAX_ITERATIONS`).
         throw: raise ``RuntimeError`` when it does not converge.
         method: the lines' statics (see :func:`moorjax.statics.solve_line_statics`).
             ``"fem"`` (default): finite-element lines, the state dynamics start
