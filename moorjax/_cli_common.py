@@ -62,12 +62,20 @@ def add_subcommand(sub, name, help, example, **kw):
                           epilog=f"example:\n  {example}", formatter_class=HelpFormatter, **kw)
 
 
-def element_option(d):
-    """``--element linear|hermite`` (statics, simulate, ensemble, fit)."""
+def element_option(d, mesh="uniform"):
+    """``--element linear|hermite`` and ``--hermite-mesh`` (statics, simulate,
+    ensemble, fit; ``mesh``: the command's default grading)."""
     d.add_argument("--element", choices=("linear", "hermite"), default="linear",
                    help="line discretisation: Aamo & Fossen's linear element (default), or Wu "
                         "et al.'s Hermite-cubic element with a tension field (lines between "
                         "fixed or moving points, free points and bodies; no 3-D seabed)")
+    d.add_argument("--hermite-mesh", choices=("touchdown", "uniform"), default=mesh,
+                   help="with --element hermite: 'touchdown' grades the elements of a line with "
+                        "one end on the seabed about its static touchdown (an element boundary "
+                        "there, elements growing away from it; moorjax.statics.hermite."
+                        "touchdown_mesh: grounded end tensions ~1e-4 of MoorPy's at 10 elements "
+                        "against ~5e-3), 'uniform' keeps equal elements (default: %(default)s; "
+                        "in dynamics the touchdown moves off the graded node)")
 
 
 def dynamics_options(d):

@@ -77,7 +77,21 @@ def load(args, motion=None):
     waves = wave_kinematics_from(getattr(args, "wave_kinematics", None))
     scene = build_scene(deck, segments=args.segments, motion=table, element=element_from(args),
                         waves=waves)
+    if getattr(args, "element", "linear") == "hermite" and getattr(args, "hermite_mesh", "uniform") == "touchdown":
+        scene = graded_at_touchdowns(scene)
     return deck, scene, table
+
+
+def graded_at_touchdowns(scene):
+    """The scene with each Hermite line's elements graded about its static
+    touchdown (:func:`moorjax.statics.hermite.touchdown_mesh`; lines off the bed
+    unchanged)."""
+    import equinox as eqx
+
+    from .statics.hermite import touchdown_mesh
+
+    lines = tuple(touchdown_mesh(line, scene.env) for line in scene.lines)
+    return eqx.tree_at(lambda s: s.lines, scene, lines)
 
 
 def dynamics_settings(args) -> dict:

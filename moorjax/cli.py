@@ -240,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("deck", help="MoorDyn v2 deck, or example:NAME")
     s.add_argument("--segments", type=positive_int,
                    help="override every line's segment count (default: the deck's)")
-    element_option(s)
+    element_option(s, mesh="touchdown")
     s.add_argument("--method", choices=("auto", "fem", "catenary"), default="auto",
                    help="auto: the exact elastic catenary where it describes the line (linear "
                         "element, Hooke's law, negligible EI, no current, flat seabed, a "

@@ -2,7 +2,7 @@
 
 The line's position r(s) over unstretched arc length s is C¹ piecewise cubic:
 each node k carries its position r_k and slope r'_k = dr/ds (|r'| = 1 + ε), and
-element e (length h = L/n, ξ = (s − s_e)/h) interpolates
+element e (length h = h_e, L/n unless ``HermiteElement.mesh`` grades them; ξ = (s − s_e)/h) interpolates
 
     r(ξ) = H₁ r_e + h H₂ r'_e + H₃ r_{e+1} + h H₄ r'_{e+1},
     H₁ = 1 − 3ξ² + 2ξ³, H₂ = ξ − 2ξ² + ξ³, H₃ = 3ξ² − 2ξ³, H₄ = ξ³ − ξ².
@@ -108,10 +108,29 @@ def strain_of_tension(law, lam, slack_ratio=1.0):
     return jnp.where(lam >= 0.0, e, jnp.where(lam < 0.0, lam, 0.0) / ea_c)
 
 
+def element_lengths(line):
+    """The unstretched element lengths h_e (n,) [m]: L/n each, or the line's
+    length split by ``HermiteElement.mesh`` (relative lengths, normalised)."""
+    mesh = getattr(line.element, "mesh", None)
+    n = line.n_segments
+    if mesh is None:
+        return jnp.full((n,), 1.0, dtype=jnp.result_type(line.length, float)) * (line.length / n)
+    if mesh.shape != (n,):
+        raise ValueError(f"line {line.label!r}: HermiteElement mesh has shape {mesh.shape}, "
+                         f"the line has {n} elements")
+    return line.length * mesh / jnp.sum(mesh)
+
+
+def _element_unknowns(line, r, dr):
+    """Each element's Hermite unknowns (n, 4, 3): r_e, h_e·r'_e, r_e+1, h_e·r'_e+1,
+    and h_e (n, 1, 1)."""
+    h = element_lengths(line)[:, None, None]
+    return jnp.stack([r[:-1], h[:, 0] * dr[:-1], r[1:], h[:, 0] * dr[1:]], axis=1), h
+
+
 def element_fields(line, dofs: HermiteDofs):
     """Per element and quadrature point (n, Q, ·): r, r', r'' and λ."""
-    h = line.segment_length
-    u = jnp.stack([dofs.r[:-1], h * dofs.dr[:-1], dofs.r[1:], h * dofs.dr[1:]], axis=1)  # (n,4,3)
+    u, h = _element_unknowns(line, dofs.r, dofs.dr)  # (n,4,3)
     r = jnp.einsum("aq,nai->nqi", H, u)
     d1 = jnp.einsum("aq,nai->nqi", DH, u) / h
     d2 = jnp.einsum("aq,nai->nqi", DDH, u) / h**2
@@ -160,22 +179,26 @@ def _distributed_load(line, env, r, d1, t, v=None):
 
 def _interpolate(line, r_nodes, dr_nodes):
     """Values (n, Q, 3) at the quadrature points of a nodal Hermite field."""
-    h = line.segment_length
-    u = jnp.stack([r_nodes[:-1], h * dr_nodes[:-1], r_nodes[1:], h * dr_nodes[1:]], axis=1)
+    u, _ = _element_unknowns(line, r_nodes, dr_nodes)
     return jnp.einsum("aq,nai->nqi", H, u)
+
+
+def quadrature_weights(line):
+    """∫ ds weights (n, Q) [m] of the quadrature points."""
+    return element_lengths(line)[:, None] * WQ
 
 
 def _to_dofs(line, f, g, b):
     """Generalised forces on (positions, slopes) (n+1, 3) each from quadrature-point
     densities: Q_a = ∫ [ H_a f − H_a'/h g − H_a''/h² b ] ds."""
-    h = line.segment_length
+    h = element_lengths(line)[:, None]  # (n, 1)
     w = WQ * h
-    qa = jnp.einsum("aq,q,nqi->nai", H, w, f) - jnp.einsum("aq,q,nqi->nai", DH, w / h, g)
+    qa = jnp.einsum("aq,nq,nqi->nai", H, w, f) - jnp.einsum("aq,nq,nqi->nai", DH, w / h, g)
     if b is not None:
-        qa = qa - jnp.einsum("aq,q,nqi->nai", DDH, w / h**2, b)
+        qa = qa - jnp.einsum("aq,nq,nqi->nai", DDH, w / h**2, b)
     zero = jnp.zeros((1, 3))
     force = jnp.concatenate([qa[:, 0], zero]) + jnp.concatenate([zero, qa[:, 2]])
-    moment = h * (jnp.concatenate([qa[:, 1], zero]) + jnp.concatenate([zero, qa[:, 3]]))
+    moment = jnp.concatenate([h * qa[:, 1], zero]) + jnp.concatenate([zero, h * qa[:, 3]])
     return force, moment
 
 
@@ -196,9 +219,8 @@ def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = N
     g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
     v = None
     if vel is not None:
-        v = _interpolate(line, vel.r, vel.dr)
-        h = line.segment_length
-        u = jnp.stack([vel.r[:-1], h * vel.dr[:-1], vel.r[1:], h * vel.dr[1:]], axis=1)
+        u, h = _element_unknowns(line, vel.r, vel.dr)
+        v = jnp.einsum("aq,nai->nqi", H, u)
         dv = jnp.einsum("aq,nai->nqi", DH, u) / h  # rate of r'
         stretch = safe_norm(d1)
         tangent = d1 / jnp.maximum(stretch, 1e-300)[..., None]
@@ -232,11 +254,11 @@ def inertia_forces(line, env, dofs: HermiteDofs, acc: HermiteDofs):
 def extensibility(line, dofs: HermiteDofs):
     """The P_m-weighted extensibility integrals (2n+1,) [m] (Eq. 16/27)."""
     lt = line.line_type
-    n, h = line.n_segments, line.segment_length
+    n = line.n_segments
     _, d1, _, lam = element_fields(line, dofs)
     eps = strain_of_tension(lt.axial, lam, line.element.slack_ratio)
     c = jnp.sum(d1 * d1, axis=-1) / (1.0 + eps) - (1.0 + eps)  # (n, Q)
-    ce = jnp.einsum("mq,q,nq->nm", P, WQ * h, c)  # (n, 3)
+    ce = jnp.einsum("mq,nq,nq->nm", P, quadrature_weights(line), c)  # (n, 3)
     out = jnp.zeros(2 * n + 1)
     return out.at[0:-1:2].add(ce[:, 0]).at[1::2].add(ce[:, 1]).at[2::2].add(ce[:, 2])
 
@@ -245,7 +267,7 @@ def extensibility_jacobian(line, dofs: HermiteDofs):
     """∂(extensibility)/∂λ (2n+1, 2n+1) [m/N]: ∫ P_m P_k ∂c/∂λ ds, banded (an
     element couples its three values), assembled from the pointwise derivative."""
     lt = line.line_type
-    n, h = line.n_segments, line.segment_length
+    n = line.n_segments
     _, d1, _, lam = element_fields(line, dofs)
     s2 = jnp.sum(d1 * d1, axis=-1)
 
@@ -254,7 +276,7 @@ def extensibility_jacobian(line, dofs: HermiteDofs):
         return s2 / (1.0 + eps) - (1.0 + eps)
 
     _, dc = jax.jvp(c, (lam,), (jnp.ones_like(lam),))  # elementwise in λ
-    ke = jnp.einsum("mq,kq,q,nq->nmk", P, P, WQ * h, dc)  # (n, 3, 3)
+    ke = jnp.einsum("mq,kq,nq,nq->nmk", P, P, quadrature_weights(line), dc)  # (n, 3, 3)
     idx = 2 * np.arange(n)[:, None] + np.arange(3)[None, :]
     out = jnp.zeros((2 * n + 1, 2 * n + 1))
     return out.at[idx[:, :, None], idx[:, None, :]].add(ke)
@@ -290,12 +312,19 @@ class HermiteElement(AbstractElement):
             the unilateral law at each quadrature point) or ``MixedTension``
             (Wu's field eliminated per evaluation); see that module for the
             measurements that chose the default. Statics always solve Wu's field.
+        mesh: the elements' relative lengths (n,) [-] from end A (normalised to
+            the line's length; ``None``: equal elements). A node placed at the
+            touchdown, where the line's curvature jumps, is what a cubic needs
+            on a grounded line: :func:`moorjax.statics.hermite.touchdown_mesh`
+            finds one from the statics.
     """
 
     slack_ratio: float = 1e-4
     tension: "AbstractTension" = None  # noqa: F821
+    mesh: jax.Array | None = None
 
-    def __init__(self, slack_ratio=1e-4, tension=None):
+    def __init__(self, slack_ratio=1e-4, tension=None, mesh=None):
+        from .._numerics import as_float
         from .hermite_motion import StrainTension
 
         if isinstance(slack_ratio, (int, float)) and not (0.0 < slack_ratio <= 1.0):
@@ -303,6 +332,13 @@ class HermiteElement(AbstractElement):
                              "(compression stiffness over EA; 1e-4 is the default)")
         self.slack_ratio = slack_ratio
         self.tension = StrainTension() if tension is None else tension
+        if mesh is not None and not isinstance(mesh, jax.core.Tracer):
+            m = np.asarray(mesh, dtype=float)
+            if m.ndim != 1 or m.size < 1 or not np.all(np.isfinite(m)) or np.any(m <= 0.0):
+                raise ValueError("HermiteElement: mesh must be a 1-d array of positive relative "
+                                 f"element lengths; got {mesh!r}")
+            mesh = as_float(m)
+        self.mesh = mesh
 
     @property
     def banded_jacobian(self) -> bool:

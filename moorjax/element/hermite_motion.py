@@ -6,7 +6,8 @@ state. :class:`HermiteState` packs, for the dynamics driver, the free nodes'
 [r, ṙ] (n−1 rows) and every node's slope scaled by the element length,
 d = h·r' [m], with its rate ḋ [m/s] (n+1 rows): one (2n, 6) array whose
 columns are all metres and metres per second, so the driver's error norm
-weighs slopes like positions.
+weighs slopes like positions (h = L/n, the mean element length, also where
+``HermiteElement.mesh`` grades the elements).
 
 The accelerations solve the consistent mass matrix M (the Hermite shape
 functions' ∫ H_a μ H_b ds, μ = m·I plus the added mass ρA·|r'|·(Ca_n(I − ttᵀ) +
@@ -60,8 +61,8 @@ import numpy as np
 from jaxtyping import Array
 
 from .._numerics import safe_norm
-from .hermite import (H, WQ, HermiteDofs, clamped_slopes, element_fields, extensibility,
-                      extensibility_jacobian, generalized_forces)
+from .hermite import (H, WQ, HermiteDofs, clamped_slopes, element_fields, element_lengths,
+                      extensibility, extensibility_jacobian, generalized_forces)
 
 
 class HermiteState(eqx.Module):
@@ -113,7 +114,7 @@ class MixedTension(AbstractTension):
         r0, d0 = lax.stop_gradient(dofs.r), lax.stop_gradient(dofs.dr)
         # start: the tension of the stretch at the nodes and midpoints
         half = jnp.stack([d0[:-1], d0[1:]], axis=1)  # (n, 2, 3)
-        h = line.segment_length
+        h = element_lengths(line)[:, None]
         mid = 1.5 * (r0[1:] - r0[:-1]) / h - 0.25 * (half[:, 0] + half[:, 1])  # r'(½)
         pts = jnp.zeros((2 * n + 1, 3)).at[0::2].set(d0).at[1::2].set(mid)
         strain = safe_norm(pts) - 1.0
@@ -149,10 +150,14 @@ class StrainTension(AbstractTension):
 # -- mass, forces, accelerations ----------------------------------------------
 
 def element_mass(line, env, dofs: HermiteDofs):
-    """Each element's consistent mass (n, 4, 4, 3, 3) [kg] on its unknowns
-    (r_k, h·r'_k, r_k+1, h·r'_k+1), with the added mass of its wet length."""
+    """Each element's consistent mass (n, 4, 4, 3, 3) [kg] on the state's unknowns
+    (r_k, d_k, r_k+1, d_k+1), d = h̄·r' with h̄ = L/n, with the added mass of its
+    wet length. (Element e's shape functions act on h_e·r' = (h_e/h̄)·d.)"""
     lt = line.line_type
-    h = line.segment_length
+    he = element_lengths(line)
+    rho = he / line.segment_length
+    one = jnp.ones_like(rho)
+    scale = jnp.stack([one, rho, one, rho], axis=1)  # (n, 4)
     _, d1, _, _ = element_fields(line, dofs)
     eye = jnp.eye(3)
     mu = lt.mass_per_length * jnp.broadcast_to(eye, d1.shape[:-1] + (3, 3))
@@ -163,7 +168,8 @@ def element_mass(line, env, dofs: HermiteDofs):
         am = lt.added_mass
         mu = mu + env.rho * lt.area * stretch[..., None, None] * (
             am.ca_normal * (eye - tt) + am.ca_axial * tt)
-    return jnp.einsum("aq,bq,q,nqij->nabij", H, H, WQ * h, mu)
+    me = jnp.einsum("aq,bq,nq,nqij->nabij", H, H, WQ * he[:, None], mu)
+    return me * (scale[:, :, None] * scale[:, None, :])[..., None, None]
 
 
 def _element_unknowns(n):

@@ -131,6 +131,12 @@ def cmd_fit(args) -> int:
         deck_path(args.deck), motion, args.target, segments=args.segments,
         line=args.line, window=_parse_window(args.window), element=element_from(args),
     )
+    if args.element == "hermite" and args.hermite_mesh == "touchdown":
+        import equinox as eqx
+
+        from .._cli_load import graded_at_touchdowns
+
+        exp = eqx.tree_at(lambda e: e.scene, exp, graded_at_touchdowns(exp.scene))
     free = [Free(n, starts.get(n)) for n in names]
     if args.optimizer == "adam":
         opt = optax.adam(args.learning_rate)

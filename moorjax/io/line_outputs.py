@@ -79,6 +79,15 @@ def _segments(r, v, length):
     return q, strain, rate
 
 
+def _unstretched_segments(line):
+    """Unstretched lengths [m] between neighbouring nodes: L/n, or a graded
+    Hermite line's element lengths (n,)."""
+    if getattr(line.element, "mesh", None) is None:
+        return float(line.segment_length)
+    mesh = np.asarray(line.element.mesh, dtype=float)
+    return float(line.length) * mesh / mesh.sum()
+
+
 def line_output_variables(res, scene, flags: dict) -> dict:
     """Dataset variables ``{name: (dims, data, units, long_name)}`` of the
     requested flags; ``flags`` maps a line's index in the scene to its written
@@ -109,7 +118,7 @@ def line_output_variables(res, scene, flags: dict) -> dict:
         n = line.n_segments
         r = np.asarray(res.positions[j])
         v = np.asarray(res.velocities[j]) if have_v else None
-        q, strain, rate = _segments(r, v, float(line.segment_length))
+        q, strain, rate = _segments(r, v, _unstretched_segments(line))
         lt = line.line_type
         if "v" in f and have_v:
             arrays["v"][:, j, : n + 1] = v

@@ -1,0 +1,162 @@
+"""Graded Hermite elements (``HermiteElement(mesh=...)``) and the touchdown mesh.
+
+The elements of a Hermite line may have unequal lengths (relative lengths,
+normalised to the line's). ``touchdown_mesh`` puts an element boundary at a
+grounded line's static touchdown and grades the elements away from it; on the
+drawn lines of ``tests/test_hermite_statics_property.py`` that takes the
+grounded lines' end-tension error at 10 elements from a median 4.6e-3 to
+1.0e-4 of the largest tension.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from moorpy.Catenary import catenary as moorpy_catenary
+
+import moorjax as mj
+from moorjax.element import HermiteElement
+from moorjax.element.hermite import element_lengths
+from moorjax.element.hermite_motion import _assemble, element_mass, unpack_hermite
+from moorjax.io import build_scene, read_deck
+from moorjax.statics.fem import solve_line_statics
+from moorjax.statics.hermite import graded_mesh, touchdown_mesh
+
+pytestmark = pytest.mark.slow
+
+DATA = Path(__file__).parent / "data"
+SOLVE = eqx.filter_jit(lambda line, env: solve_line_statics(line, env, throw=False))
+LT = mj.LineType(0.09, 77.7066, 384.243e6)
+ENV = mj.Environment(300.0)
+RA, RB = (-600.0, 0.0, -250.0), (0.0, 0.0, -20.0)
+# MoorPy's statics of reference case A (/work/shared/reference/statics.csv)
+CASE_A = (736938.85, 911089.02, 134.78553)
+
+
+def line_with(mesh, length=700.0, n=8):
+    return mj.Line(LT, length, n, mj.FixedEnd(RA), mj.FixedEnd(RB), element=HermiteElement(mesh=mesh))
+
+
+def moorpy_free_hanging(length=700.0):
+    w = float(LT.wet_weight(ENV.rho, ENV.g))
+    fah, fav, fbh, fbv, _ = moorpy_catenary(RB[0] - RA[0], RB[2] - RA[2], length, 384.243e6, w,
+                                            CB=-(RA[2] + 300.0), Tol=1e-12, MaxIter=200)
+    return float(np.hypot(fah, fav)), float(np.hypot(fbh, fbv))
+
+
+def case_a(n=10, mesh=None):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(DATA / "case_A.dat"), segments=n)
+    (line,) = scene.lines
+    return mj.Line(line.line_type, line.length, n, line.end_a, line.end_b,
+                   element=HermiteElement(mesh=mesh)), scene.env
+
+
+def test_equal_relative_lengths_are_the_uniform_element():
+    a, b = SOLVE(line_with(None), ENV), SOLVE(line_with(np.full(8, 3.0)), ENV)
+    np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-9)
+    np.testing.assert_allclose([a.tension_a, a.tension_b], [b.tension_a, b.tension_b], rtol=1e-12)
+
+
+def test_unequal_elements_still_agree_with_moorpy():
+    """A random mesh of a free-hanging line: every element's own length enters the
+    shape functions, the quadrature and the tension field."""
+    mesh = np.random.default_rng(3).uniform(0.3, 2.0, 8)
+    line = line_with(mesh)
+    np.testing.assert_allclose(element_lengths(line), 700.0 * mesh / mesh.sum(), rtol=1e-14)
+    st = SOLVE(line, ENV)
+    ta, tb = moorpy_free_hanging()
+    assert bool(st.converged)
+    assert abs(float(st.tension_a) / ta - 1) < 1e-4 and abs(float(st.tension_b) / tb - 1) < 1e-4
+
+
+def test_the_mass_of_unequal_elements_is_the_line_mass():
+    """A rigid translation (positions 1, slopes 0) has the line's mass in the
+    consistent mass of graded elements (slopes scaled by their own lengths)."""
+    mesh = np.random.default_rng(4).uniform(0.3, 2.0, 8)
+    line = mj.Line(mj.LineType(0.09, 77.7066, 384.243e6), 700.0, 8, mj.FixedEnd(RA), mj.FixedEnd(RB),
+                   element=HermiteElement(mesh=mesh))
+    st = SOLVE(line, ENV)
+    q = st.rest_state.packed()
+    s = unpack_hermite(line, q)
+    from moorjax.element.hermite import HermiteDofs
+
+    r = jnp.concatenate([jnp.asarray(RA)[None], s.r, jnp.asarray(RB)[None]])
+    dofs = HermiteDofs(r=r, dr=s.d / line.segment_length, lam=jnp.zeros(17))
+    m = _assemble(element_mass(line, ENV, dofs))
+    u = np.zeros((18, 3))
+    u[0::2, 0] = 1.0  # every node moves 1 m in x, no slope changes
+    assert abs(float(u.reshape(-1) @ m @ u.reshape(-1)) / (77.7066 * 700.0) - 1) < 1e-12
+
+
+def test_a_bad_mesh_is_refused():
+    with pytest.raises(ValueError, match="positive relative element lengths"):
+        HermiteElement(mesh=[1.0, -1.0, 2.0])
+    with pytest.raises(ValueError, match="has shape"):
+        SOLVE(line_with(np.ones(5)), ENV)
+
+
+def test_graded_mesh_puts_a_boundary_at_the_touchdown():
+    mesh = graded_mesh(1000.0, 10, 0.0, 333.0, 5.0)
+    assert mesh.shape == (10,) and np.all(mesh > 0) and abs(mesh.sum() - 1) < 1e-14
+    edges = 1000.0 * np.concatenate([[0.0], np.cumsum(mesh)])
+    assert np.min(np.abs(edges - 333.0)) < 1e-9
+    k = int(np.argmin(np.abs(edges - 333.0)))
+    assert abs(edges[k + 1] - edges[k] - 5.0) < 1e-9  # the suspended side starts at H/w
+    assert edges[k] - edges[k - 1] < 100.0  # the grounded side grows from it too (capped)
+    sizes = np.diff(edges)
+    for side in (sizes[:k], sizes[k:]):  # geometric on each side, growth at most 3
+        ratios = side[1:] / side[:-1]
+        assert np.all(ratios < 3.0 + 1e-9) and np.all(ratios > 1 / 3.0 - 1e-9)
+    # a gentle catenary (H/w longer than an element): equal elements on each side,
+    # the straight grounded stretch with half its share of them
+    np.testing.assert_allclose(graded_mesh(100.0, 10, 0.0, 50.0, 100.0), [0.5 / 3] * 3 + [0.5 / 7] * 7)
+
+
+def test_touchdown_mesh_on_reference_case_a():
+    """Case A (a chain resting 135 m on the bed) at 10 elements: the boundary at
+    MoorPy's touchdown, end tensions within 1e-4 and the grounded length within
+    0.1 m (equal elements: 2.1e-4 and 0.1 m)."""
+    line, env = case_a()
+    graded = touchdown_mesh(line, env)
+    mesh = np.asarray(graded.element.mesh)
+    edges = float(line.length) * np.concatenate([[0.0], np.cumsum(mesh)])
+    assert np.min(np.abs(edges - CASE_A[2])) < 0.5
+    st = SOLVE(graded, env)
+    ta, tb, lb = CASE_A
+    assert bool(st.converged)
+    assert abs(float(st.tension_a) / ta - 1) < 1e-4 and abs(float(st.tension_b) / tb - 1) < 1e-4
+    assert abs(float(st.grounded_length) - lb) < 0.1
+    # swapping the ends grades the mirror image
+    swapped = mj.Line(line.line_type, line.length, 10, line.end_b, line.end_a, element=HermiteElement())
+    np.testing.assert_allclose(np.asarray(touchdown_mesh(swapped, env).element.mesh)[::-1], mesh,
+                               rtol=1e-6)
+
+
+def test_lines_off_the_bed_and_linear_lines_are_not_graded():
+    assert touchdown_mesh(line_with(None), ENV).element.mesh is None
+    line, env = case_a()
+    linear = mj.Line(line.line_type, line.length, 10, line.end_a, line.end_b)
+    assert touchdown_mesh(linear, env) is linear
+    assert touchdown_mesh(line, mj.Environment(300.0)) is line  # no seabed
+
+
+def test_cli_statics_grades_hermite_lines_at_the_touchdown(capsys):
+    from moorjax.cli import main
+
+    rows = {}
+    for mesh in ("touchdown", "uniform"):
+        assert main(["statics", "example:oc3_catenary", "--segments", "10", "--element", "hermite",
+                     "--hermite-mesh", mesh, "--json"]) == 0
+        (rows[mesh],) = json.loads(capsys.readouterr().out)
+    ta, tb, lb = CASE_A
+    err = {k: abs(r["tension_b"] / tb - 1) for k, r in rows.items()}
+    assert err["touchdown"] < 1e-4 < err["uniform"], err
+    assert abs(rows["touchdown"]["grounded_length"] - lb) < 0.1
