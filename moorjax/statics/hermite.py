@@ -482,11 +482,13 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     solution), puts an element boundary there and grades the elements away from
     it (:func:`graded_mesh`, first element a = H/w from the suspended end's
     horizontal pull), and repeats until the touchdown moves less than ``tol`` of
-    a mean element (at most ``iterations`` times). Only a line with one end on
-    the bed is graded (an anchor's line); lines without a seabed, off it, with
-    both ends on it, with a touchdown within ``min_element`` of a mean element
-    of an end, or not of Hermite elements are returned unchanged, and a mesh
-    whose statics fail is not kept (the last one that converged is returned).
+    a mean element (at most ``iterations`` times). A line with one end on the
+    bed (an anchor's line) gets one such boundary; a line whose ends are both
+    above the bed but which sags onto it gets two (the touchdowns from each
+    end's vertical pull). Lines without a seabed, off it, with both ends on it,
+    with a touchdown within ``min_element`` of a mean element of an end, or not
+    of Hermite elements are returned unchanged, and a mesh whose statics fail
+    is not kept (the last one that converged is returned).
     On a bathymetry or with a current the touchdown estimate is approximate
     (the mesh is still a valid one, only less well placed).
 
@@ -516,26 +518,32 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
         height_a, height_b = (float(x) for x in _end_heights(current, env_static, tt))
         tol_z = 1e-6 * max(float(env.depth), 1.0)
         on_a, on_b = height_a <= tol_z, height_b <= tol_z
-        if not (on_a ^ on_b) or w <= 0.0 or float(st.grounded_length) < min_element * mean:
+        if (on_a and on_b) or w <= 0.0 or float(st.grounded_length) < min_element * mean:
             return best  # off the bed, or both ends on it (not graded)
-        # the suspended stretch's unstretched length is its far end's vertical
-        # pull over the weight (the bed carries the rest): exact for a flat,
+        # a suspended stretch's unstretched length is its end's vertical pull
+        # over the weight (the bed carries the rest): exact for a flat,
         # frictionless bed without current, and a smooth functional of the
-        # solution (a sampled touchdown is off by the cubic's wiggle on the bed)
-        far = st.force_b if on_a else st.force_a  # the suspended end's pull
-        suspended = abs(float(far[2])) / w
-        knot = length - suspended if on_a else suspended  # the touchdown's arc length
+        # solution (a sampled touchdown is off by the cubic's wiggle on the bed).
+        # The touchdowns: from end A's pull unless A is on the bed, and from end
+        # B's unless B is (both for a line sagging onto the bed in its middle)
+        fa, fb = np.asarray(st.force_a, float), np.asarray(st.force_b, float)
+        start = 0.0 if on_a else abs(fa[2]) / w
+        end = length if on_b else length - abs(fb[2]) / w
+        if not end - start > min_element * mean:
+            return best
+        knots = np.array([start, end])
+        inner = np.array([not on_a, not on_b])  # the knots inside the line
         if here is not None:
-            if abs(knot - here) < tol * mean:
+            if np.all(np.abs(knots - here)[inner] < tol * mean):
                 return best
-            history.append((here, knot - here))  # the mesh's knot, and estimate − knot
-        if len(history) >= 2:  # a secant step on estimate − knot (the plain iteration oscillates)
+            history.append((here, knots - here))  # the mesh's knots, and estimates − knots
+        if len(history) >= 2:  # secant steps on estimate − knot (the plain iteration oscillates)
             (x0, f0), (x1, f1) = history[-2:]
-            if abs(f1 - f0) > 1e-12 * length:
-                knot = x1 - f1 * (x1 - x0) / (f1 - f0)
-        knot = min(max(knot, min_element * mean), length - min_element * mean)
-        start, end = (0.0, knot) if on_a else (knot, length)
+            ok = inner & (np.abs(f1 - f0) > 1e-12 * length)
+            knots = np.where(ok, x1 - f1 * (x1 - x0) / np.where(ok, f1 - f0, 1.0), knots)
+        knots = np.where(inner, np.clip(knots, min_element * mean, length - min_element * mean), knots)
+        pulls = [np.hypot(f[0], f[1]) for f, held in ((fa, on_a), (fb, on_b)) if not held]
         graded = eqx.tree_at(lambda ln: ln.element.mesh, current,
-                             jnp.asarray(graded_mesh(length, n, start, end, float(jnp.hypot(far[0], far[1])) / w)))
-        current, here = graded, knot
+                             jnp.asarray(graded_mesh(length, n, knots[0], knots[1], min(pulls) / w)))
+        current, here = graded, knots
     return best
