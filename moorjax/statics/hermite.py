@@ -412,6 +412,7 @@ def _end_heights(line: Line, env, t):
     _, height, _ = env.seabed.contact(ends, None, lt.diameter, lt.wet_weight(env.rho, env.g), env.depth)
     return height
 
+
 #: the largest ratio of neighbouring elements' lengths in :func:`graded_mesh`
 MAX_GROWTH = 3.0
 
