@@ -77,15 +77,16 @@ def load(args, motion=None):
     waves = wave_kinematics_from(getattr(args, "wave_kinematics", None))
     scene = build_scene(deck, segments=args.segments, motion=table, element=element_from(args),
                         waves=waves)
-    if getattr(args, "element", "linear") == "hermite" and getattr(args, "hermite_mesh", "uniform") == "touchdown":
-        scene = graded_at_touchdowns(scene)
-    return deck, scene, table
+    return deck, graded_as_asked(args, scene), table
 
 
-def graded_at_touchdowns(scene):
-    """The scene with each Hermite line's elements graded about its static
-    touchdown (:func:`moorjax.statics.hermite.touchdown_mesh`; lines off the bed
-    unchanged)."""
+def graded_as_asked(args, scene):
+    """The scene as ``--element hermite --hermite-mesh touchdown`` asks: each
+    Hermite line's elements graded about its static touchdown
+    (:func:`moorjax.statics.hermite.touchdown_mesh`; lines off the bed
+    unchanged); otherwise the scene itself."""
+    if getattr(args, "element", "linear") != "hermite" or getattr(args, "hermite_mesh", "uniform") != "touchdown":
+        return scene
     import equinox as eqx
 
     from .statics.hermite import touchdown_mesh

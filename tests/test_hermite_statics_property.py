@@ -162,3 +162,15 @@ def test_grounded_lines_beat_the_linear_element_per_element(solved):
     linear = np.median([_errors(c, lin)[1] for c, _, lin in grounded])
     print(f"grounded, median error of the largest tension: Hermite {hermite:.2e}, linear {linear:.2e}")
     assert hermite < 0.5 * linear, (hermite, linear)
+
+
+def test_a_converged_line_gives_a_finite_start_for_the_dynamics(solved, graded):
+    """The dynamics start from each static solution's ``rest_state`` (the strain
+    closure's equilibrium). On a drawn grounded line whose Wu equilibrium was
+    compressed along the bed that state was NaN while ``converged`` said True;
+    the closure's solve now falls back to Wu's equilibrium where it fails."""
+    states = [st for _, st, _ in solved] + [st for _, _, st in graded]
+    bad = [i for i, st in enumerate(states)
+           if bool(st.converged) and not all(bool(np.all(np.isfinite(x)))
+                                             for x in (st.rest_state.r, st.rest_state.d))]
+    assert bad == [], bad

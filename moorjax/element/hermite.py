@@ -121,7 +121,7 @@ def element_lengths(line):
     return line.length * mesh / jnp.sum(mesh)
 
 
-def _element_unknowns(line, r, dr):
+def _element_coefficients(line, r, dr):
     """Each element's Hermite unknowns (n, 4, 3): r_e, h_e·r'_e, r_e+1, h_e·r'_e+1,
     and h_e (n, 1, 1)."""
     h = element_lengths(line)[:, None, None]
@@ -130,7 +130,7 @@ def _element_unknowns(line, r, dr):
 
 def element_fields(line, dofs: HermiteDofs):
     """Per element and quadrature point (n, Q, ·): r, r', r'' and λ."""
-    u, h = _element_unknowns(line, dofs.r, dofs.dr)  # (n,4,3)
+    u, h = _element_coefficients(line, dofs.r, dofs.dr)  # (n,4,3)
     r = jnp.einsum("aq,nai->nqi", H, u)
     d1 = jnp.einsum("aq,nai->nqi", DH, u) / h
     d2 = jnp.einsum("aq,nai->nqi", DDH, u) / h**2
@@ -179,7 +179,7 @@ def _distributed_load(line, env, r, d1, t, v=None):
 
 def _interpolate(line, r_nodes, dr_nodes):
     """Values (n, Q, 3) at the quadrature points of a nodal Hermite field."""
-    u, _ = _element_unknowns(line, r_nodes, dr_nodes)
+    u, _ = _element_coefficients(line, r_nodes, dr_nodes)
     return jnp.einsum("aq,nai->nqi", H, u)
 
 
@@ -219,7 +219,7 @@ def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = N
     g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
     v = None
     if vel is not None:
-        u, h = _element_unknowns(line, vel.r, vel.dr)
+        u, h = _element_coefficients(line, vel.r, vel.dr)
         v = jnp.einsum("aq,nai->nqi", H, u)
         dv = jnp.einsum("aq,nai->nqi", DH, u) / h  # rate of r'
         stretch = safe_norm(d1)

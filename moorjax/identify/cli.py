@@ -112,7 +112,9 @@ def cmd_fit(args) -> int:
     import optax
 
     from .._cli_common import deck_path
-    from .._cli_load import element_from
+    import equinox as eqx
+
+    from .._cli_load import element_from, graded_as_asked
     from .._progress import Progress, enabled
     from ..io.results import check_output
     from .experiment import load_experiment
@@ -131,12 +133,7 @@ def cmd_fit(args) -> int:
         deck_path(args.deck), motion, args.target, segments=args.segments,
         line=args.line, window=_parse_window(args.window), element=element_from(args),
     )
-    if args.element == "hermite" and args.hermite_mesh == "touchdown":
-        import equinox as eqx
-
-        from .._cli_load import graded_at_touchdowns
-
-        exp = eqx.tree_at(lambda e: e.scene, exp, graded_at_touchdowns(exp.scene))
+    exp = eqx.tree_at(lambda e: e.scene, exp, graded_as_asked(args, exp.scene))
     free = [Free(n, starts.get(n)) for n in names]
     if args.optimizer == "adam":
         opt = optax.adam(args.learning_rate)

@@ -401,9 +401,6 @@ def _grounded_length(line, env, dofs, push=0.0):
     return jnp.where(w > 0, contact / jnp.where(w > 0, w, 1.0), 0.0)
 
 
-
-
-
 @eqx.filter_jit
 def _end_heights(line: Line, env, t):
     """Heights [m] of the line's ends above the seabed (along its normal)."""
@@ -509,18 +506,19 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     mesh = np.full(n, 1.0 / n) if line.element.mesh is None else np.asarray(line.element.mesh, float)
     current = eqx.tree_at(lambda ln: ln.element.mesh, line, jnp.asarray(mesh / mesh.sum()),
                           is_leaf=lambda x: x is None)
+    height_a, height_b = (float(x) for x in _end_heights(line, env_static, jnp.asarray(t, float)))
+    tol_z = 1e-6 * max(float(env.depth), 1.0)
+    on_a, on_b = height_a <= tol_z, height_b <= tol_z  # the ends on the bed (the mesh moves no end)
+    if (on_a and on_b) or w <= 0.0:
+        return line  # both ends on the bed (not graded), or a buoyant line
     history, best, here = [], line, None  # best: the last mesh whose statics converged
-    tt = jnp.asarray(t, float)
     for _ in range(iterations + 1):
         st = solve_line_statics(current, env_static, t, throw=False)
         if not bool(st.converged) or not bool(jnp.all(jnp.isfinite(st.rest_state.r))):
             return best
         best = line if here is None else current
-        height_a, height_b = (float(x) for x in _end_heights(current, env_static, tt))
-        tol_z = 1e-6 * max(float(env.depth), 1.0)
-        on_a, on_b = height_a <= tol_z, height_b <= tol_z
-        if (on_a and on_b) or w <= 0.0 or float(st.grounded_length) < min_element * mean:
-            return best  # off the bed, or both ends on it (not graded)
+        if float(st.grounded_length) < min_element * mean:
+            return best  # off the bed (not graded)
         # a suspended stretch's unstretched length is its end's vertical pull
         # over the weight (the bed carries the rest): exact for a flat,
         # frictionless bed without current, and a smooth functional of the
