@@ -3,6 +3,8 @@
 * ``case_b_*``: case B of the validation set, a 110 m line (d = 0.12 m,
   10.8 kg/m, EA = 150 MN) from an anchor 80 m deep to a fairlead near the
   surface (taut, goes slack and snaps when the fairlead surges 2 m);
+* ``hermite_case_a``: case A (the OC3-like chain catenary, ``tests/data/case_A.dat``)
+  with Hermite elements, its fairlead surging 5 m over 10 s;
 * ``polyester_scene``: the same geometry with a polyester rope whose stiffness
   grows with the mean load (MBL-normalised EA(T)), for the identification and
   gradient tests.
@@ -10,9 +12,15 @@
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
+
+import equinox as eqx
 import numpy as np
 
 import moorjax as mj
+
+DATA = Path(__file__).parent / "data"
 
 CASE_B_ANCHOR = (-80.5168, 0.0, -80.0)  # [m]
 
@@ -53,3 +61,19 @@ def polyester_scene(centre=(0.0, 0.0, -5.0), amplitude=(0.5, 0.0, 0.0), period=4
     end_b = mj.SinePath(list(centre), list(amplitude), period, phase)
     line = mj.Line(lt, length, n, mj.FixedEnd(list(CASE_B_ANCHOR)), end_b)
     return mj.Scene([line], env)
+
+
+def hermite_case_a(n, motion=True, element=None):
+    """Case A's deck at ``n`` elements of ``element`` (default ``HermiteElement()``),
+    the fairlead on its 5 m / 10 s surge (``motion``) or held."""
+    from moorjax.element import HermiteElement
+    from moorjax.io import build_scene, read_deck
+
+    element = HermiteElement() if element is None else element
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(DATA / "case_A.dat"), segments=n, element=element)
+    if motion:
+        path = mj.SinePath([-5.2, 0.0, -70.0], [5.0, 0.0, 0.0], 10.0)
+        scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene, path)
+    return scene

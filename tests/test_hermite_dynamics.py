@@ -13,34 +13,24 @@ from __future__ import annotations
 
 import contextlib
 import io
-import warnings
 from pathlib import Path
 
 import equinox as eqx
 import numpy as np
 import pytest
 
-import moorjax as mj
 from moorjax.cli import main
 from moorjax.dynamics import simulate
 from moorjax.dynamics.hermite_newmark import newmark_hermite
 from moorjax.element import HermiteElement
 from moorjax.element.hermite_motion import HermiteState, MixedTension
-from moorjax.io import build_scene, read_deck
 from moorjax.statics.hermite import hermite_equilibrium
+from scenes import hermite_case_a
 
 DATA = Path(__file__).parent / "data"
 
 
-def case_a(n, motion=True, element=None):
-    element = HermiteElement() if element is None else element
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        scene = build_scene(read_deck(DATA / "case_A.dat"), segments=n, element=element)
-    if motion:
-        path = mj.SinePath([-5.2, 0.0, -70.0], [5.0, 0.0, 0.0], 10.0)
-        scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene, path)
-    return scene
+case_a = hermite_case_a
 
 
 def test_static_state_stays_at_rest():

@@ -23,6 +23,7 @@ import lineax as lx
 import optimistix as optx
 from equinox.internal import ω
 from jax import lax
+from diffrax._root_finder._verychord import _VeryChordState
 
 
 class VeryChord(diffrax.VeryChord):
@@ -80,6 +81,22 @@ class StageChord(VeryChord):
 
     refresh_rate: float | None = eqx.field(static=True, default=None)
 
+    def init(self, fn, y, args, options, f_struct, aux_struct, tags):
+        if not isinstance(self.linear_solver, StageFactorSolver) or "init_state" in options:
+            return super().init(fn, y, args, options, f_struct, aux_struct, tags)
+        # diffrax's call at the linearisation point: the lines' own factors
+        # instead of a linearised operator for the solver to materialise
+        dtype = jnp.result_type(*jax.tree_util.tree_leaves(y))
+        return _VeryChordState(
+            linear_state=(lx.FunctionLinearOperator(_identity, jax.eval_shape(lambda: y)),
+                          lax.stop_gradient(self.linear_solver.stage_init(y, args))),
+            diff=jax.tree_util.tree_map(lambda a: jnp.full(a.shape, jnp.inf, a.dtype), y),
+            diffsize=jnp.array(jnp.inf, dtype=dtype),
+            diffsize_prev=jnp.array(1.0, dtype=dtype),
+            result=optx.RESULTS.successful,
+            step=jnp.array(0),
+        )
+
     def step(self, fn, y, args, options, state, tags):
         stage = stage_arguments(args)
         if stage is None:
@@ -100,6 +117,8 @@ class StageChord(VeryChord):
             slow = (state.step >= 1) & (diffsize > self.refresh_rate * state.diffsize)
 
             def rebuild(_):
+                if isinstance(self.linear_solver, StageFactorSolver):
+                    return lax.stop_gradient(self.linear_solver.stage_init(new_y, args))
                 op = lx.linearise(lx.JacobianLinearOperator(_NoAux(fn), new_y, args))
                 return lax.stop_gradient(self.linear_solver.init(op, options={}))
 
@@ -120,3 +139,57 @@ class _NoAux(eqx.Module):
 
     def __call__(self, y, args):
         return self.fn(y, args)[0]
+
+
+def _identity(v):
+    return v
+
+
+class StageFactorSolver(lx.AbstractLinearSolver):
+    """Newton's linear solve for lines whose elements factor their own stage
+    matrix (:meth:`~moorjax.element.base.AbstractElement.stage_factor`: the
+    Hermite element's mass form, :mod:`~moorjax.element.hermite_stage`).
+
+    Its factors are built by :meth:`stage_init` from the stage's arguments (the
+    scene, the time, the stage state and γ·h), which :class:`StageChord` passes
+    it in place of a linearised operator: the vector field's dense Jacobian is
+    never formed. Only for diffrax's f-space stages (``stage_arguments``)."""
+
+    def stage_init(self, f_stage, args):
+        """The per-line factors at the stage iterate ``f_stage`` (the stage
+        derivative, diffrax's f-space unknown) of the stage ``args``."""
+        from .vector_field import stage_factors
+
+        stage = stage_arguments(args)
+        if stage is None:
+            raise ValueError("StageFactorSolver needs diffrax's f-space stage arguments")
+        y_partial, gamma_h = stage
+        t, scene = args[4], args[6]
+        y = (y_partial**ω + gamma_h * f_stage**ω).ω
+        return stage_factors(t, y, scene, gamma_h)
+
+    def init(self, operator, options):
+        raise NotImplementedError(
+            "StageFactorSolver factors the stage matrix from the stage's arguments "
+            "(StageChord.init), not from an operator")
+
+    def compute(self, state, vector, options):
+        del options
+        value = tuple(f.solve(v) for f, v in zip(state, vector))
+        return value, lx.RESULTS.successful, {}
+
+    def transpose(self, state, options):
+        raise NotImplementedError("StageFactorSolver is not transposed (Newton iterations "
+                                  "are not differentiated)")
+
+    def conj(self, state, options):
+        return state, options
+
+    def assume_full_rank(self):
+        return True
+
+    def allow_dependent_columns(self, operator):
+        return False
+
+    def allow_dependent_rows(self, operator):
+        return False

@@ -163,6 +163,10 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
     #: ``band(t, y, args)``: W's block-tridiagonal band, or ``None`` (then and
     #: without it, the band of the exact Jacobian from 18 coloured JVPs)
     band: Any = eqx.field(static=True, default=None)
+    #: ``factors(t, y, args, c)``: each line's factored I − c·J (objects with
+    #: ``solve``, :func:`~moorjax.dynamics.vector_field.stage_factors`), used
+    #: instead of a W where given (the exact Jacobian, rebuilt every step)
+    factors: Any = eqx.field(static=True, default=None)
     #: add the linearisation error of the step to its error estimate (see
     #: :meth:`_with_linearisation_error`)
     linearisation_check: bool = eqx.field(static=True, default=True)
@@ -176,8 +180,14 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         return self.tableau.order  # the embedded solution's local error is O(h^order)
 
     # -- the Jacobian and the stage matrix ------------------------------------
+    def __check_init__(self):
+        if self.factors is not None and self.jacobian_age != 1:
+            raise ValueError("RosenbrockW: factors are rebuilt every step (jacobian_age = 1)")
+
     def _jacobian(self, terms, t, y, args):
         y = lax.stop_gradient(y)
+        if self.factors is not None:  # no W: the factors hold the exact stage matrix
+            return jnp.zeros(())
 
         def f(z):
             return terms.vf(t, z, args)
@@ -206,6 +216,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
 
     def _apply(self, jac, v):
         """W·v (same pytree as v)."""
+        if isinstance(jac, _Tangent):
+            return jac(v)
         if self.structured:
             leaves, treedef = jtu.tree_flatten(v)
             sizes = tuple(int(x.shape[0]) for x in leaves)
@@ -248,6 +260,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         return jtu.tree_map(lambda a, b: (a - b) / delta, terms.vf(t0 + delta, y0, args), f0)
 
     def _solve(self, lu, rhs):
+        if self.factors is not None:
+            return tuple(f.solve(r) for f, r in zip(lu, rhs))
         if self.structured:
             return SecondOrderBandSolver()._compute_band(lu, rhs)
         flat, unravel = ravel_pytree(rhs)
@@ -279,7 +293,11 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
             jac = lax.cond(stale, lambda: self._jacobian(terms, t0, y0, args), lambda: st.jac)
             age = jnp.where(stale, 0, st.age)
         c = tab.gamma * h
-        lu = self._factor(jac, c, y0)
+        if self.factors is None:
+            lu = self._factor(jac, c, y0)
+        else:
+            lu = lax.stop_gradient(self.factors(t0, lax.stop_gradient(y0), args, c))
+            jac = _Tangent(terms, t0, y0, args)
         # ∂f/∂t (the prescribed motions)
         f_t = self._time_derivative(terms, t0, y0, args, f0)
         u = []
@@ -300,8 +318,22 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
             y_error = self._with_linearisation_error(y_error, jac, lu, c, h, y0, y1, f0, f_t, f_end)
         dense_info = dict(y0=y0, y1=y1, k0=jtu.tree_map(lambda a: h * a, f0),
                           k1=jtu.tree_map(lambda a: h * a, f_end))
+        if self.factors is not None:
+            jac = st.jac
         new_state = _State(f_end, jac, age + 1, jnp.asarray(h, dtype=float))
         return y1, y_error, dense_info, new_state, diffrax.RESULTS.successful
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, args)
+
+
+class _Tangent:
+    """J·v by forward differentiation of the vector field at (t, y): the
+    linearisation check's W where the lines factor their own stage matrix."""
+
+    def __init__(self, terms, t, y, args):
+        self.f = lambda z: terms.vf(t, z, args)
+        self.y = lax.stop_gradient(y)
+
+    def __call__(self, v):
+        return jax.jvp(self.f, (self.y,), (v,))[1]

@@ -25,6 +25,7 @@ from .._numerics import as_float
 from .adjoint import ADJOINTS, banded_jacobian, check_adjoint
 from .meter import StepMeter
 from .solvers import LINEARLY_IMPLICIT, StateNorm, is_implicit, make_solver
+from .vector_field import has_stage_factors
 
 
 class Settings(eqx.Module):
@@ -180,7 +181,11 @@ def plan(
             raise ValueError(f"{name} = {tol}{unit} is out of range; expected 1e-14 <= {name} <= {hi}")
     solver, rtol, atol, atol_velocity = resolve_tolerances(solver, rtol, atol, atol_velocity, scene)
     if scene is not None and linear_solver in ("reduced", "block") and not banded_jacobian(scene):
-        linear_solver = "dense"
+        # Hermite lines factor their stage matrix in mass form (block-tridiagonal)
+        linear_solver = "element" if has_stage_factors(scene) else "dense"
+    if linear_solver == "element" and (scene is None or not has_stage_factors(scene)):
+        raise ValueError("linear_solver='element' needs a scene whose lines all factor their "
+                         "stage matrix (Hermite lines without clamps, no bodies)")
     if (scene is not None and scene.bodies and isinstance(solver, str)
             and solver.lower() in LINEARLY_IMPLICIT):
         linear_solver = "dense"  # ROS2's band needs line states only

@@ -103,10 +103,14 @@ def simulate(
         max_steps: step limit.
         save_nodes: also return node positions and segment tensions.
         linear_solver: Newton's linear solve: ``"reduced"`` (default; positions
-            eliminated, 3×3 block-tridiagonal), ``"block"`` (6×6 blocks) or
-            ``"dense"`` (dense LU, O(n³); for comparison). Lines with the
-            consistent mass (Eq. 2) have a dense Jacobian (M⁻¹K), so they always
-            use ``"dense"``.
+            eliminated, 3×3 block-tridiagonal), ``"block"`` (6×6 blocks),
+            ``"element"`` (each line's element factors its own stage matrix) or
+            ``"dense"`` (dense LU, O(n³); for comparison). Scenes of Hermite
+            lines (consistent mass: a dense Jacobian M⁻¹K) take ``"element"``
+            (the block-tridiagonal mass form M − c·C − c²·K,
+            :mod:`~moorjax.element.hermite_stage`) where no line is clamped and
+            there are no bodies; other lines with the consistent mass (Eq. 2),
+            and those, use ``"dense"``.
         dense_newton: same as ``linear_solver="dense"``.
         progress: print a text progress meter.
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if

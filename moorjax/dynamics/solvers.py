@@ -30,7 +30,7 @@ import jax.numpy as jnp
 from jaxtyping import Array
 
 from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
-from .newton import StageChord, VeryChord
+from .newton import StageChord, StageFactorSolver, VeryChord
 from .rosenbrock import RosenbrockW
 
 __all__ = ["IMPLICIT", "EXPLICIT", "LINEARLY_IMPLICIT", "SOLVERS", "LINEAR_SOLVERS", "StateNorm", "make_solver",
@@ -60,7 +60,7 @@ LINEARLY_IMPLICIT = {
 SOLVERS = tuple(sorted(IMPLICIT) + sorted(LINEARLY_IMPLICIT) + sorted(EXPLICIT))
 
 
-LINEAR_SOLVERS = ("reduced", "block", "dense")
+LINEAR_SOLVERS = ("reduced", "block", "element", "dense")
 
 #: the implicit methods' default chord root finder
 NEWTON = StageChord
@@ -118,8 +118,12 @@ def make_solver(
             steps there is none, so give them).
         linear_solver: Newton's linear solve: ``"reduced"`` (positions
             eliminated, 3×3 block-tridiagonal, default), ``"block"`` (6×6
-            block-tridiagonal) or ``"dense"`` (dense LU, O(n³), for comparison
-            and for Jacobians that are not banded).
+            block-tridiagonal), ``"element"`` (each line's element factors its
+            own stage matrix: the Hermite element's block-tridiagonal mass form,
+            :mod:`~moorjax.element.hermite_stage`; implicit Runge–Kutta methods
+            with :class:`~moorjax.dynamics.newton.StageChord` only) or
+            ``"dense"`` (dense LU, O(n³), for comparison and for Jacobians that
+            are not banded).
         dense_newton: same as ``linear_solver="dense"`` (kept for compatibility).
         newton: the chord root finder's class (default :data:`NEWTON`):
             :class:`~moorjax.dynamics.newton.StageChord` (tolerances on the
@@ -133,8 +137,10 @@ def make_solver(
         if linear_solver not in LINEAR_SOLVERS:
             raise ValueError(f"unknown linear solver {linear_solver!r}; choose one of "
                              f"{', '.join(LINEAR_SOLVERS)}")
-        from .vector_field import stiff_band
+        from .vector_field import stage_factors, stiff_band
 
+        if linear_solver == "element" and not dense_newton:
+            return LINEARLY_IMPLICIT[key](structured=False, factors=_ByName(stage_factors))
         structured = not dense_newton and linear_solver != "dense"
         band = _ByName(stiff_band) if structured else None
         return LINEARLY_IMPLICIT[key](structured=structured, band=band)
@@ -149,6 +155,7 @@ def make_solver(
     kwargs = {
         "reduced": {"linear_solver": SecondOrderBandSolver()},
         "block": {"linear_solver": BlockTridiagonalSolver()},
+        "element": {"linear_solver": StageFactorSolver()},
         "dense": {},
     }[linear_solver]
     newton = NEWTON if newton is None else newton

@@ -192,3 +192,18 @@ def stiff_band(t, y, scene):
             return None
         parts.append(band)
     return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
+
+
+def has_stage_factors(scene) -> bool:
+    """Whether :func:`stage_factors` factors ``scene``'s stage matrix (structure
+    only): no bodies, and every line's element factors its own."""
+    return not scene.bodies and all(line.element.provides_stage_factor(line)
+                                    for line in scene.lines)
+
+
+def stage_factors(t, y, scene, c) -> tuple:
+    """Each line's factored stage matrix I − c·∂(its rate)/∂(its state)
+    (:meth:`~moorjax.element.base.AbstractElement.stage_factor`; the lines do not
+    couple without bodies), at time t [s] and solver state y, c = γ·h [s]."""
+    return tuple(line.element.stage_factor(line, scene.env, t, q, c)
+                 for line, q in zip(scene.lines, y))

@@ -65,6 +65,19 @@ class AbstractElement(eqx.Module):
         del line, env, t, q
         return None
 
+    def provides_stage_factor(self, line) -> bool:
+        """Whether :meth:`stage_factor` returns a factor for ``line``."""
+        del line
+        return False
+
+    def stage_factor(self, line, env, t, q, c):
+        """The implicit stages' Newton matrix I − c·∂(state_rate)/∂q at the packed
+        state q, factored: an object whose ``solve(r)`` returns δ (rows, 6) with
+        (I − c·J)·δ = r, or ``None`` (node elements: the driver's band solvers
+        take the coloured Jacobian of the whole vector field). c = γ·h [s]."""
+        del line, env, t, q, c
+        return None
+
     def state_rate(self, line, env, t, q):
         """dq/dt (rows, 6) of the packed state q at time t [s]."""
         from ..model.line import LineState

@@ -345,6 +345,16 @@ class HermiteElement(AbstractElement):
         return False
 
     # -- the dynamics driver's packed state ------------------------------------
+    def provides_stage_factor(self, line) -> bool:
+        from .hermite_stage import provides_stage_factor
+
+        return provides_stage_factor(line)
+
+    def stage_factor(self, line, env, t, q, c):
+        from .hermite_stage import stage_factor
+
+        return stage_factor(line, env, t, q, c)
+
     def state_rate(self, line, env, t, q):
         from .hermite_motion import state_rate
 

@@ -219,6 +219,19 @@ def _partition(n):
     return fi, pi
 
 
+def forces_and_mass(line, env, t, u, ud):
+    """The generalised forces f (2n+2, 3) on all unknowns (interleaved, as
+    :func:`_nodes`), the element masses (n, 4, 4, 3, 3), the resolved dofs and
+    the tension closure's (λ, ε) for the unknowns u and their rates ud."""
+    n, h = line.n_segments, line.segment_length
+    dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
+    dofs, tension = line.element.tension.resolve(line, dofs)
+    vel = HermiteDofs(r=ud[0::2], dr=ud[1::2] / h, lam=dofs.lam)
+    force, moment = generalized_forces(line, env, dofs, vel, t, tension)
+    f = jnp.zeros((2 * n + 2, 3)).at[0::2].set(force).at[1::2].set(moment / h)
+    return f, element_mass(line, env, dofs), dofs, tension
+
+
 def dynamics(line, env, t, q):
     """Accelerations (2n+2, 3) of all unknowns (interleaved; the ends' are their
     paths'), the generalised forces (2n+2, 3), the element masses (n, 4, 4, 3,
@@ -226,14 +239,9 @@ def dynamics(line, env, t, q):
     6), the field, and S = M_ff⁻¹M_fp (free unknowns × 6): how the free
     accelerations fall with the ends' (end A's, end B's) accelerations beyond
     their paths' (one factorisation serves both)."""
-    n, h = line.n_segments, line.segment_length
+    n = line.n_segments
     u, ud = _nodes(line, t, q)
-    dofs = HermiteDofs(r=u[0::2], dr=u[1::2] / h, lam=jnp.zeros(2 * n + 1))
-    dofs, tension = line.element.tension.resolve(line, dofs)
-    vel = HermiteDofs(r=ud[0::2], dr=ud[1::2] / h, lam=dofs.lam)
-    force, moment = generalized_forces(line, env, dofs, vel, t, tension)
-    f = jnp.zeros((2 * n + 2, 3)).at[0::2].set(force).at[1::2].set(moment / h)
-    me = element_mass(line, env, dofs)
+    f, me, dofs, tension = forces_and_mass(line, env, t, u, ud)
     size = 3 * (2 * n + 2)
     fi, pi = _partition(n)
     a_p = jnp.concatenate([line.end_a.acceleration(t), line.end_b.acceleration(t)])
