@@ -46,7 +46,7 @@ def test_the_factored_stage_solve_equals_the_dense_one(variant):
         element = HermiteElement(mesh=np.array([1.0, 2.0, 3.0, 2.0, 1.5, 1.0]))
     else:
         element = HermiteElement()
-    scene = case_a(6, element)
+    scene = case_a(6, element=element)
     if variant == "bending":
         scene = eqx.tree_at(lambda s: s.lines[0].line_type.ei, scene, 5.0e6,
                             is_leaf=lambda x: x is None)
@@ -77,7 +77,7 @@ def test_plan_factors_hermite_lines_and_keeps_the_dense_solve_where_it_cannot():
     assert not isinstance(root.linear_solver, StageFactorSolver)
     # asked for where no element factors its stage matrix
     with pytest.raises(ValueError, match="linear_solver='element'"):
-        plan(1.0, solver="kvaerno5", scene=case_a(4, LinearElement()), linear_solver="element")
+        plan(1.0, solver="kvaerno5", scene=case_a(4, element=LinearElement()), linear_solver="element")
 
 
 def test_runs_with_the_factored_stages_follow_the_dense_newton():
