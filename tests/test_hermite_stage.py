@@ -22,7 +22,7 @@ from moorjax.dynamics.newton import StageFactorSolver
 from moorjax.dynamics.settings import plan
 from moorjax.dynamics.vector_field import has_stage_factors, pack
 from moorjax.element import HermiteElement, LinearElement
-from moorjax.element.hermite_motion import state_rate
+from moorjax.element.hermite_motion import MixedTension, state_rate
 from moorjax.element.hermite_stage import stage_factor
 from scenes import hermite_case_a
 
@@ -36,12 +36,17 @@ def _moving_state(scene, seed):
     return q + jnp.asarray(rng.normal(size=q.shape) * np.array([0.05] * 3 + [0.5] * 3))
 
 
-@pytest.mark.parametrize("variant", ["plain", "bending", "graded"])
+CLAMP_A = mj.ClampedEnd((-853.87, 0.0, -320.0), (1.0, 0.0, 0.0))  # case A's anchor, along the bed
+
+
+@pytest.mark.parametrize("variant", ["plain", "bending", "graded", "clamped"])
 def test_the_factored_stage_solve_equals_the_dense_one(variant):
     """δ from the mass-form factor equals the dense solve of (I − c·J)·δ = r
     (J the vector field's Jacobian by forward differentiation) to 1e-9 of δ, for
     drawn states of case A's chain (seabed contact, drag, added mass), for
-    several c = γ·h from 1 ms to 1 s."""
+    several c = γ·h from 1 ms to 1 s; with bending stiffness, on a graded mesh,
+    and clamped at the anchor (the clamped slope's held components projected
+    out; the drawn state moves them too, which the exact J sees)."""
     if variant == "graded":
         element = HermiteElement(mesh=np.array([1.0, 2.0, 3.0, 2.0, 1.5, 1.0]))
     else:
@@ -50,6 +55,8 @@ def test_the_factored_stage_solve_equals_the_dense_one(variant):
     if variant == "bending":
         scene = eqx.tree_at(lambda s: s.lines[0].line_type.ei, scene, 5.0e6,
                             is_leaf=lambda x: x is None)
+    if variant == "clamped":
+        scene = eqx.tree_at(lambda s: s.lines[0].end_a, scene, CLAMP_A)
     line, env = scene.lines[0], scene.env
     jacobian = jax.jit(jax.jacfwd(lambda q, t: state_rate(line, env, t, q)))
     factored = jax.jit(lambda q, t, c, r: stage_factor(line, env, t, q, c).solve(r))
@@ -69,15 +76,22 @@ def test_plan_factors_hermite_lines_and_keeps_the_dense_solve_where_it_cannot():
     root = plan(1.0, solver="kvaerno5", scene=hermite).solver.root_finder
     assert isinstance(root.linear_solver, StageFactorSolver)
     assert plan(1.0, solver="ros34pw2", scene=hermite).solver.factors is not None
-    # a clamped end restricts its slope's acceleration: the dense solve stays
-    clamped = eqx.tree_at(lambda s: s.lines[0].end_a, hermite,
-                          mj.ClampedEnd((-853.87, 0.0, -320.0), (1.0, 0.0, 0.0)))
-    assert not has_stage_factors(clamped)
+    # a clamped end: its slope's held components are projected out of the band
+    clamped = eqx.tree_at(lambda s: s.lines[0].end_a, hermite, CLAMP_A)
+    assert has_stage_factors(clamped)
     root = plan(1.0, solver="kvaerno5", scene=clamped).solver.root_finder
+    assert isinstance(root.linear_solver, StageFactorSolver)
+    # Wu's mixed field couples each element's tension to the whole line: dense
+    mixed = case_a(4, element=HermiteElement(tension=MixedTension()))
+    assert not has_stage_factors(mixed)
+    root = plan(1.0, solver="kvaerno5", scene=mixed).solver.root_finder
     assert not isinstance(root.linear_solver, StageFactorSolver)
     # asked for where no element factors its stage matrix
     with pytest.raises(ValueError, match="linear_solver='element'"):
-        plan(1.0, solver="kvaerno5", scene=case_a(4, element=LinearElement()), linear_solver="element")
+        plan(1.0, solver="kvaerno5", scene=case_a(4, element=LinearElement()),
+             linear_solver="element")
+    with pytest.raises(ValueError, match="linear_solver='element'"):
+        plan(1.0, solver="kvaerno5", scene=mixed, linear_solver="element")
 
 
 def test_runs_with_the_factored_stages_follow_the_dense_newton():

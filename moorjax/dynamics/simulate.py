@@ -108,9 +108,10 @@ def simulate(
             ``"dense"`` (dense LU, O(n³); for comparison). Scenes of Hermite
             lines (consistent mass: a dense Jacobian M⁻¹K) take ``"element"``
             (the block-tridiagonal mass form M − c·C − c²·K,
-            :mod:`~moorjax.element.hermite_stage`) where no line is clamped and
-            there are no bodies; other lines with the consistent mass (Eq. 2),
-            and those, use ``"dense"``.
+            :mod:`~moorjax.element.hermite_stage`; a clamped slope's held
+            components projected out) where every line has the strain closure
+            and there are no bodies; other lines with the consistent mass
+            (Eq. 2), Wu's mixed field and body scenes use ``"dense"``.
         dense_newton: same as ``linear_solver="dense"``.
         progress: print a text progress meter.
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if

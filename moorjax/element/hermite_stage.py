@@ -21,13 +21,22 @@ element forces (no mass solve in them), M from the element blocks, and the
 matrix is factored by the block Thomas algorithm in O(n). The prescribed end
 positions are no unknowns: their rows and columns are the identity.
 
+A clamped end slope accelerates along its clamp's direction d only
+(:func:`~moorjax.element.hermite_motion._clamped_solve`: a = B·a_r with
+Bᵀ·M·B·a_r = Bᵀ·g). With P the node-block projector onto what may move (the
+identity, d·dᵀ on a clamped slope, zero on a prescribed position) and
+A = M − c·C − c²·K, the stage solve is
+
+    δ_p = (I − P)·r_V   (the held components: their rate never changes)
+    (P·A·P + I − P)·z = P·(M·r_V + c·K·r_U − A·δ_p),   δ_V = z + δ_p,
+
+still block-tridiagonal (P is block-diagonal).
+
 The matrix is exact for the strain closure
 (:class:`~moorjax.element.hermite_motion.StrainTension`). Wu's mixed field
 (:class:`~moorjax.element.hermite_motion.MixedTension`) couples each element's
-tension to the whole line, which the band would leave out, and clamped ends
-restrict their slope's acceleration
-(:func:`~moorjax.element.hermite_motion._clamped_solve`), which the band does
-not hold: such lines keep the dense Newton solve.
+tension to the whole line, which the band would leave out: such lines keep the
+dense Newton solve.
 """
 
 from __future__ import annotations
@@ -48,8 +57,8 @@ from .hermite_motion import StrainTension, _mass_apply, _nodes, dynamics, forces
 def provides_stage_factor(line) -> bool:
     """Whether :func:`stage_factor` is the exact stage matrix of ``line``
     (structure): the strain closure (Wu's mixed field couples each element's
-    tension to the whole line) and no clamped end."""
-    return isinstance(line.element.tension, StrainTension) and not clamped_slopes(line)
+    tension to the whole line)."""
+    return isinstance(line.element.tension, StrainTension)
 
 
 class HermiteStageFactor(eqx.Module):
@@ -58,22 +67,31 @@ class HermiteStageFactor(eqx.Module):
     Attributes:
         mass: M's node blocks (lower, diag, upper), each (n+1, 6, 6) [kg].
         stiffness: K's node blocks [N/m].
-        lu: block LU of M − c·C − c²·K (the ends' positions: identity).
+        lu: block LU of P·(M − c·C − c²·K)·P + I − P.
         c: γ·h [s].
+        held: I − P's node blocks (n+1, 6, 6) and A = M − c·C − c²·K's blocks,
+            for a line with a clamped slope; ``None`` without (then I − P holds
+            only the ends' positions, which are no unknowns).
     """
 
     mass: tuple
     stiffness: tuple
     lu: btd.BlockTridiagonalLU
     c: Array
+    held: tuple | None = None
 
     def solve(self, r):
         """δ (2n, 6) with (I − c·J)·δ = r, both in the packed state layout."""
         n = self.mass[1].shape[0] - 1
-        free = _free(n)
         r_u, r_v = _by_node(r[:, :3], n), _by_node(r[:, 3:], n)
         rhs = btd.matvec(*self.mass, r_v) + self.c * btd.matvec(*self.stiffness, r_u)
-        d_v = btd.solve(self.lu, rhs * free)
+        if self.held is None:
+            d_v = btd.solve(self.lu, rhs * _free(n))
+        else:
+            held, band = self.held
+            d_p = jnp.einsum("kij,kj->ki", held, r_v)
+            rhs = rhs - btd.matvec(*band, d_p)
+            d_v = btd.solve(self.lu, rhs - jnp.einsum("kij,kj->ki", held, rhs)) + d_p
         d_u = r_u + self.c * d_v
         return jnp.concatenate([_packed(d_u, n), _packed(d_v, n)], axis=-1)
 
@@ -96,22 +114,31 @@ def stage_factor(line, env, t, q, c) -> HermiteStageFactor:
     k_band = band_of(lambda x: tangent(x.reshape(u.shape), zero), by_node)[:3]
     c_band = band_of(lambda x: tangent(zero, x.reshape(u.shape)), by_node)[:3]
     m_band = _mass_band(me)
-    free = _free(n)
-    mask = (free[:, :, None] * jnp.roll(free, 1, axis=0)[:, None, :],  # row i, column i − 1
-            free[:, :, None] * free[:, None, :],
-            free[:, :, None] * jnp.roll(free, -1, axis=0)[:, None, :])
-    lower, diag, upper = (
-        (m - c * cc - c * c * k) * w for m, cc, k, w in zip(m_band, c_band, k_band, mask))
-    diag = diag + jax.vmap(jnp.diag)(1.0 - free)
+    band = tuple(m - c * cc - c * c * k for m, cc, k in zip(m_band, c_band, k_band))
+    keep = _projector(line, t)  # P's node blocks (n+1, 6, 6)
+    lower = keep @ band[0] @ jnp.roll(keep, 1, axis=0)  # row k, column k − 1
+    diag = keep @ band[1] @ keep + (jnp.eye(6) - keep)
+    upper = keep @ band[2] @ jnp.roll(keep, -1, axis=0)
     lu = btd.factor(lower, diag, upper)
-    return HermiteStageFactor(mass=m_band, stiffness=k_band, lu=lu, c=jnp.asarray(c))
+    held = (jnp.eye(6) - keep, band) if clamped_slopes(line, t) else None
+    return HermiteStageFactor(mass=m_band, stiffness=k_band, lu=lu, c=jnp.asarray(c), held=held)
+
+
+def _projector(line, t):
+    """P's node blocks (n+1, 6, 6) on [r_k, d_k]: the identity on what may move,
+    zero on the ends' positions, d·dᵀ on a slope clamped along d."""
+    n = line.n_segments
+    keep = jnp.asarray(np.broadcast_to(np.eye(6), (n + 1, 6, 6)) * _free(n)[:, None, :])
+    for node, d in clamped_slopes(line, t):
+        keep = keep.at[node, 3:, 3:].set(jnp.outer(d, d))
+    return keep
 
 
 def _free(n):
     """(n+1, 6) 1 for the unknowns of each node [r_k, d_k], 0 for the ends' positions."""
     free = np.ones((n + 1, 6))
     free[[0, n], :3] = 0.0
-    return jnp.asarray(free)
+    return free
 
 
 def _by_node(x, n):
