@@ -27,7 +27,7 @@ import numpy as np
 from jaxtyping import Array
 
 from ..io.table import read_table
-from ..model.ends import TabulatedPath
+from ..model.ends import MovingClampedEnd, TabulatedPath
 
 _CHANNEL_RE = re.compile(r"^L(?P<id>[^_]+)_tension_(?P<end>[ab])$", re.IGNORECASE)
 
@@ -164,6 +164,8 @@ def _check_motion_span(scene, ts, name):
     """Measurements must lie within the time span of every tabulated motion."""
     for line in scene.lines:
         for end_name, end in (("A", line.end_a), ("B", line.end_b)):
+            if isinstance(end, MovingClampedEnd):
+                end = end.path  # a clamp carried along a table
             if not isinstance(end, TabulatedPath):
                 continue
             t = np.asarray(end.t)

@@ -12,6 +12,7 @@ from .ends import BodyEnd as BodyEnd
 from .ends import ClampedEnd as ClampedEnd
 from .ends import FixedEnd as FixedEnd
 from .ends import KinematicEnd as KinematicEnd
+from .ends import MovingClampedEnd as MovingClampedEnd
 from .ends import SinePath as SinePath
 from .ends import TabulatedPath as TabulatedPath
 from .environment import AbstractCurrent as AbstractCurrent
@@ -61,6 +62,7 @@ __all__ = [
     'LineType',
     'LinearEA',
     'MorisonDrag',
+    'MovingClampedEnd',
     'PolyesterMBL',
     'PolyesterWu',
     'GridCurrent',

@@ -280,6 +280,17 @@ class AbstractClampedEnd(AbstractEnd):
         """(3,) unit vector [-] along which the line leaves the end."""
 
 
+def _clamp_unit(direction, who):
+    """The clamp's direction (3,) normalised; a zero vector is refused."""
+    check_finite(direction, "clamp direction", "-")
+    d = as_float(direction, 3)
+    norm = jnp.linalg.norm(d)
+    if not isinstance(norm, jax.core.Tracer) and float(norm) == 0.0:
+        raise ValueError(f"{who}: direction = (0, 0, 0) has no direction; give the unit "
+                         "vector along which the line leaves the clamp, e.g. (1, 0, 0)")
+    return d / norm
+
+
 class ClampedEnd(AbstractClampedEnd):
     """A fixed clamp at ``point`` (3,) [m] holding the line along ``direction`` (3,).
 
@@ -292,14 +303,8 @@ class ClampedEnd(AbstractClampedEnd):
 
     def __init__(self, point, direction):
         check_finite(point, "end position", "m")
-        check_finite(direction, "clamp direction", "-")
-        d = as_float(direction, 3)
-        norm = jnp.linalg.norm(d)
-        if not isinstance(norm, jax.core.Tracer) and float(norm) == 0.0:
-            raise ValueError("ClampedEnd: direction = (0, 0, 0) has no direction; give the unit "
-                             "vector along which the line leaves the clamp, e.g. (1, 0, 0)")
+        self.unit = _clamp_unit(direction, "ClampedEnd")
         self.point = as_float(point, 3)
-        self.unit = d / norm
 
     def position(self, t):
         return self.point
@@ -309,6 +314,50 @@ class ClampedEnd(AbstractClampedEnd):
 
     def acceleration(self, t):
         return jnp.zeros(3)
+
+    def direction(self, t):
+        return self.unit
+
+
+class MovingClampedEnd(AbstractClampedEnd):
+    """A clamp carried along a prescribed ``path`` that keeps its ``direction``.
+
+    ``path`` is an end with a prescribed motion (:class:`SinePath`,
+    :class:`TabulatedPath`, :class:`FixedEnd`): the clamp is where it is and
+    moves as it moves (its time span is the path's); the line leaves the clamp
+    along ``direction`` (3,) at all times (normalised here), so the clamp
+    translates without turning — a hang-off on a vessel whose rotations are
+    left out. A clamp fixed to a body would turn with it: not supported
+    (refused here for a :class:`BodyEnd` path).
+    """
+
+    path: AbstractEnd
+    unit: Array
+
+    def __init__(self, path, direction):
+        if not isinstance(path, AbstractEnd):
+            raise TypeError(f"MovingClampedEnd: path must be an end with a motion (SinePath, "
+                            f"TabulatedPath, FixedEnd), got {type(path).__name__}")
+        if isinstance(path, (BodyEnd, KinematicEnd)):
+            raise ValueError("MovingClampedEnd: a clamp on a body would turn with the body, "
+                             "which moorjax does not model yet; pin the line to the body "
+                             "(BodyEnd) or prescribe the clamp's path")
+        if isinstance(path, AbstractClampedEnd):
+            raise ValueError("MovingClampedEnd: path is already a clamp; give its path")
+        self.unit = _clamp_unit(direction, "MovingClampedEnd")
+        self.path = path
+
+    def position(self, t):
+        return self.path.position(t)
+
+    def velocity(self, t):
+        return self.path.velocity(t)
+
+    def acceleration(self, t):
+        return self.path.acceleration(t)
+
+    def time_span(self):
+        return self.path.time_span()
 
     def direction(self, t):
         return self.unit

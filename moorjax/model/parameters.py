@@ -83,8 +83,8 @@ def _end_point(line, end):
     if isinstance(e, SinePath):
         return e.center
     raise ValueError(
-        f"line {line.label}: end {end} is a {type(e).__name__} (a prescribed motion "
-        "read from a table); only a fixed end's point or a sine path's centre can be varied"
+        f"line {line.label}: end {end} is a {type(e).__name__}; only a fixed end's point "
+        "or a sine path's centre can be varied"
     )
 
 
