@@ -51,6 +51,11 @@ def test_moving_clamp_refuses_what_it_cannot_model():
         mj.MovingClampedEnd(CLAMP_AT, ALONG_X)
     with pytest.raises(ValueError, match="already a clamp"):
         mj.MovingClampedEnd(mj.ClampedEnd(CLAMP_AT, ALONG_X), ALONG_X)
+    # a run that leaves the time span of the clamp's tabulated path
+    table = mj.TabulatedPath([0.0, 1.0], [CLAMP_AT, CLAMP_AT + [0.0, 0.0, 0.1]])
+    line = _propped(mj.MovingClampedEnd(table, ALONG_X), HermiteElement(), 4)
+    with pytest.raises(ValueError, match="ends at t = 1 s"):
+        simulate(mj.Scene((line,), ENV), 2.0)
 
 
 @pytest.mark.slow
