@@ -185,7 +185,7 @@ def plan(
         linear_solver = "element" if has_stage_factors(scene) else "dense"
     if linear_solver == "element" and (scene is None or not has_stage_factors(scene)):
         raise ValueError("linear_solver='element' needs a scene whose lines all factor their "
-                         "stage matrix (Hermite lines with the strain closure, no bodies)")
+                         "stage matrix (Hermite lines with the strain closure)")
     if (scene is not None and scene.bodies and isinstance(solver, str)
             and solver.lower() in LINEARLY_IMPLICIT):
         linear_solver = "dense"  # ROS2's band needs line states only

@@ -109,9 +109,10 @@ def simulate(
             lines (consistent mass: a dense Jacobian M⁻¹K) take ``"element"``
             (the block-tridiagonal mass form M − c·C − c²·K,
             :mod:`~moorjax.element.hermite_stage`; a clamped slope's held
-            components projected out) where every line has the strain closure
-            and there are no bodies; other lines with the consistent mass
-            (Eq. 2), Wu's mixed field and body scenes use ``"dense"``.
+            components projected out; with bodies each body's exact block
+            beside its lines', their coupling left to the Newton iteration)
+            where every line has the strain closure; other lines with the
+            consistent mass (Eq. 2) and Wu's mixed field use ``"dense"``.
         dense_newton: same as ``linear_solver="dense"``.
         progress: print a text progress meter.
         throw: raise ``RuntimeError`` (with the simulated time and likely cause) if

@@ -23,6 +23,7 @@ lines' end accelerations are one linear solve, decided by the scene's structure
 
 from __future__ import annotations
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 
@@ -196,14 +197,49 @@ def stiff_band(t, y, scene):
 
 def has_stage_factors(scene) -> bool:
     """Whether :func:`stage_factors` factors ``scene``'s stage matrix (structure
-    only): no bodies, and every line's element factors its own."""
-    return not scene.bodies and all(line.element.provides_stage_factor(line)
-                                    for line in scene.lines)
+    only): every line's element factors its own."""
+    return all(line.element.provides_stage_factor(line) for line in scene.lines)
+
+
+class DenseStageFactor(eqx.Module):
+    """A body's block of the stage matrix, I − c·∂(its rate)/∂(its state), by LU."""
+
+    lu: jax.Array
+    pivots: jax.Array
+
+    def solve(self, r):
+        return jax.scipy.linalg.lu_solve((self.lu, self.pivots), r)
 
 
 def stage_factors(t, y, scene, c) -> tuple:
-    """Each line's factored stage matrix I − c·∂(its rate)/∂(its state)
-    (:meth:`~moorjax.element.base.AbstractElement.stage_factor`; the lines do not
-    couple without bodies), at time t [s] and solver state y, c = γ·h [s]."""
-    return tuple(line.element.stage_factor(line, scene.env, t, q, c)
-                 for line, q in zip(scene.lines, y))
+    """The factored blocks of the stage matrix I − c·∂(dy/dt)/∂y at time t [s]
+    and solver state y, c = γ·h [s]: each line's own
+    (:meth:`~moorjax.element.base.AbstractElement.stage_factor`, lines of one
+    structure in one vmapped call), then each body's (exact, one derivative of
+    the vector field per body state, LU).
+
+    Without bodies the lines do not couple and the blocks are the matrix. With
+    bodies the lines are factored with their fairleads where the bodies are
+    (moving with them) and the couplings between a body and its lines are left
+    out: a block-Jacobi matrix, as the linear element's structured solve with
+    bodies (:mod:`~moorjax.linalg.banded_solver`); Newton's iteration then
+    contracts at about (c·dt)²·k/M (fairlead stiffness against body mass) and
+    its convergence test still decides."""
+    n = len(scene.lines)
+    y_lines, lines, _, _ = _body_kinematics(y, scene)
+    env = scene.env
+    factors = map_lines(lambda line, q: line.element.stage_factor(line, env, t, q, c),
+                        lines, y_lines)
+    if not scene.bodies:
+        return factors
+    blocks = []
+    for i, z in enumerate(y[n:]):
+        def column(e, i=i):  # J·e for e on body i's state only
+            dy = tuple(jnp.zeros_like(x) for x in y)
+            dy = dy[:n + i] + (e,) + dy[n + i + 1:]
+            return jax.jvp(lambda w: vector_field(t, w, scene), (y,), (dy,))[1][n + i]
+
+        cols = jax.vmap(column)(jnp.eye(z.shape[0], dtype=z.dtype))  # row k: J·e_k
+        blocks.append(DenseStageFactor(*jax.scipy.linalg.lu_factor(
+            jnp.eye(z.shape[0], dtype=z.dtype) - c * cols.T)))
+    return factors + tuple(blocks)
