@@ -401,6 +401,37 @@ def _grounded_length(line, env, dofs, push=0.0):
     return jnp.where(w > 0, contact / jnp.where(w > 0, w, 1.0), 0.0)
 
 
+#: segments per Hermite element of the linear equilibrium that places the first
+#: touchdown where equal Hermite elements do not (:func:`touchdown_mesh`). On the
+#: grounded lines of ``tests/test_hermite_statics_property.py`` (10 elements):
+#: equal elements failed on two (draws 47 and 188) and, where the touchdown bends
+#: within a few hundredths of an element, converged on a horizontal pull 2–50×
+#: too small (draws 90, 108: H = 46 N for MoorPy's 2.3 kN), so the mesh graded
+#: from it started at a millimetre and its statics failed or landed 3e-3 off;
+#: the linear element at 8 segments per element gave H within 1e-3 and all four
+#: a graded mesh that converges (end tensions 1.6e-4 … 1.1e-3 of MoorPy's)
+FINE_SEGMENTS = 8
+#: a first horizontal pull H with H/w below this fraction of a mean element is
+#: not trusted (:data:`FINE_SEGMENTS`)
+SHARP = 0.05
+
+
+def _sharp(st, on_a, on_b, w, mean):
+    """Whether a converged equal-element solution bends at its touchdown within
+    :data:`SHARP` of an element (H/w from its suspended end's horizontal pull)."""
+    pulls = [float(np.hypot(*np.asarray(f, float)[:2])) for f, held in
+             ((st.force_a, on_a), (st.force_b, on_b)) if not held]
+    return bool(pulls) and min(pulls) / w < SHARP * mean
+
+
+def _fine_linear(line: Line) -> Line:
+    """The line with :data:`FINE_SEGMENTS` linear segments per Hermite element."""
+    from ..element.linear import LinearElement
+
+    return Line(line.line_type, line.length, FINE_SEGMENTS * line.n_segments, line.end_a,
+                line.end_b, element=LinearElement(), label=line.label)
+
+
 @eqx.filter_jit
 def _end_heights(line: Line, env, t):
     """Heights [m] of the line's ends above the seabed (along its normal)."""
@@ -480,7 +511,10 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     solution), puts an element boundary there and grades the elements away from
     it (:func:`graded_mesh`, first element a = H/w from the suspended end's
     horizontal pull), and repeats until the touchdown moves less than ``tol`` of
-    a mean element (at most ``iterations`` times). A line with one end on the
+    a mean element (at most ``iterations`` times). The first touchdown and pull
+    come from equal elements, or, where those fail or bend within
+    :data:`SHARP` of an element (their pull is then unreliable), from the linear
+    element's equilibrium at :data:`FINE_SEGMENTS` segments per element. A line with one end on the
     bed (an anchor's line) gets one such boundary; a line whose ends are both
     above the bed but which sags onto it gets two (the touchdowns from each
     end's vertical pull). Lines without a seabed, off it, with both ends on it,
@@ -514,9 +548,16 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     history, best, here = [], line, None  # best: the last mesh whose statics converged
     for _ in range(iterations + 1):
         st = solve_line_statics(current, env_static, t, throw=False)
-        if not bool(st.converged) or not bool(jnp.all(jnp.isfinite(st.rest_state.r))):
+        ok = bool(st.converged) and bool(jnp.all(jnp.isfinite(st.rest_state.r)))
+        if here is None and (not ok or _sharp(st, on_a, on_b, w, mean)):
+            # the first touchdown from the linear element's equilibrium (see
+            # FINE_SEGMENTS), where equal Hermite elements fail or bend too sharply
+            st = solve_line_statics(_fine_linear(line), env_static, t, throw=False)
+            ok = bool(st.converged)
+        if not ok:
             return best
-        best = line if here is None else current
+        if here is not None:
+            best = current
         if float(st.grounded_length) < min_element * mean:
             return best  # off the bed (not graded)
         # a suspended stretch's unstretched length is its end's vertical pull
