@@ -115,12 +115,20 @@ def stage_factor(line, env, t, q, c) -> HermiteStageFactor:
     c_band = band_of(lambda x: tangent(zero, x.reshape(u.shape)), by_node)[:3]
     m_band = _mass_band(me)
     band = tuple(m - c * cc - c * c * k for m, cc, k in zip(m_band, c_band, k_band))
-    keep = _projector(line, t)  # P's node blocks (n+1, 6, 6)
-    lower = keep @ band[0] @ jnp.roll(keep, 1, axis=0)  # row k, column k − 1
-    diag = keep @ band[1] @ keep + (jnp.eye(6) - keep)
-    upper = keep @ band[2] @ jnp.roll(keep, -1, axis=0)
+    if clamped_slopes(line, t):
+        keep = _projector(line, t)  # P's node blocks (n+1, 6, 6)
+        lower = keep @ band[0] @ jnp.roll(keep, 1, axis=0)  # row k, column k − 1
+        diag = keep @ band[1] @ keep + (jnp.eye(6) - keep)
+        upper = keep @ band[2] @ jnp.roll(keep, -1, axis=0)
+        held = (jnp.eye(6) - keep, band)
+    else:  # P is diagonal (0 on the ends' positions): rows and columns masked
+        free = jnp.asarray(_free(n))
+        lower = free[:, :, None] * band[0] * jnp.roll(free, 1, axis=0)[:, None, :]
+        diag = free[:, :, None] * band[1] * free[:, None, :] + jnp.asarray(
+            np.eye(6) * (1.0 - _free(n))[:, None, :])
+        upper = free[:, :, None] * band[2] * jnp.roll(free, -1, axis=0)[:, None, :]
+        held = None
     lu = btd.factor(lower, diag, upper)
-    held = (jnp.eye(6) - keep, band) if clamped_slopes(line, t) else None
     return HermiteStageFactor(mass=m_band, stiffness=k_band, lu=lu, c=jnp.asarray(c), held=held)
 
 
