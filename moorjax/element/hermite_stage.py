@@ -122,10 +122,11 @@ def stage_factor(line, env, t, q, c) -> HermiteStageFactor:
         upper = keep @ band[2] @ jnp.roll(keep, -1, axis=0)
         held = (jnp.eye(6) - keep, band)
     else:  # P is diagonal (0 on the ends' positions): rows and columns masked
-        free = jnp.asarray(_free(n))
+        free_np = _free(n)
+        free = jnp.asarray(free_np)
         lower = free[:, :, None] * band[0] * jnp.roll(free, 1, axis=0)[:, None, :]
         diag = free[:, :, None] * band[1] * free[:, None, :] + jnp.asarray(
-            np.eye(6) * (1.0 - _free(n))[:, None, :])
+            np.eye(6) * (1.0 - free_np)[:, None, :])  # I − P
         upper = free[:, :, None] * band[2] * jnp.roll(free, -1, axis=0)[:, None, :]
         held = None
     lu = btd.factor(lower, diag, upper)

@@ -416,12 +416,19 @@ FINE_SEGMENTS = 8
 SHARP = 0.05
 
 
+def _horizontal_pull(st, on_a, on_b):
+    """The smallest horizontal pull H [N] of a solution's suspended ends (those
+    not held on the bed), ``None`` if both are."""
+    pulls = [float(np.hypot(*np.asarray(f, float)[:2])) for f, held in
+             ((st.force_a, on_a), (st.force_b, on_b)) if not held]
+    return min(pulls) if pulls else None
+
+
 def _sharp(st, on_a, on_b, w, mean):
     """Whether a converged equal-element solution bends at its touchdown within
     :data:`SHARP` of an element (H/w from its suspended end's horizontal pull)."""
-    pulls = [float(np.hypot(*np.asarray(f, float)[:2])) for f, held in
-             ((st.force_a, on_a), (st.force_b, on_b)) if not held]
-    return bool(pulls) and min(pulls) / w < SHARP * mean
+    pull = _horizontal_pull(st, on_a, on_b)
+    return pull is not None and pull / w < SHARP * mean
 
 
 def _fine_linear(line: Line) -> Line:
@@ -582,8 +589,8 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
             ok = inner & (np.abs(f1 - f0) > 1e-12 * length)
             knots = np.where(ok, x1 - f1 * (x1 - x0) / np.where(ok, f1 - f0, 1.0), knots)
         knots = np.where(inner, np.clip(knots, min_element * mean, length - min_element * mean), knots)
-        pulls = [np.hypot(f[0], f[1]) for f, held in ((fa, on_a), (fb, on_b)) if not held]
+        first = _horizontal_pull(st, on_a, on_b) / w  # the catenary's length scale H/w
         graded = eqx.tree_at(lambda ln: ln.element.mesh, current,
-                             jnp.asarray(graded_mesh(length, n, knots[0], knots[1], min(pulls) / w)))
+                             jnp.asarray(graded_mesh(length, n, knots[0], knots[1], first)))
         current, here = graded, knots
     return best
