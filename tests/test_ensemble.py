@@ -133,7 +133,7 @@ def test_lines_of_equal_structure_are_grouped():
 SHARDED = textwrap.dedent(
     """
     import os, sys, json
-    os.environ["XLA_FLAGS"] = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
+    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=4"
     import jax, numpy as np
     sys.path.insert(0, sys.argv[1])
     import test_ensemble as t
