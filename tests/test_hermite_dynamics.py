@@ -25,6 +25,7 @@ from moorjax.dynamics.hermite_newmark import newmark_hermite
 from moorjax.element import HermiteElement
 from moorjax.element.hermite_motion import HermiteState, MixedTension
 from moorjax.statics.hermite import hermite_equilibrium
+from gradcheck import gradient_and_central_difference
 from scenes import hermite_case_a
 
 DATA = Path(__file__).parent / "data"
@@ -116,10 +117,7 @@ def test_gradient_and_vmap_of_a_hermite_run():
 
     # two compiled programs: the value with its gradient (also the differences'
     # and the loop's values), and the vmapped run
-    value_and_grad = jax.jit(jax.value_and_grad(tension))
-    grad = float(value_and_grad(1.6)[1])
-    f = lambda cd: float(value_and_grad(cd)[0])  # noqa: E731
-    fd = (f(1.6 + 1e-3) - f(1.6 - 1e-3)) / 2e-3
+    grad, fd, f = gradient_and_central_difference(tension, 1.6, 1e-3)
     assert abs(grad) > 1e3  # drag matters in the first surge
     assert abs(grad / fd - 1) < 1e-5, (grad, fd)
     cds = jnp.array([1.2, 2.0])

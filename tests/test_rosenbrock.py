@@ -24,6 +24,7 @@ import pytest
 from moorjax.dynamics import simulate
 from moorjax.dynamics.rosenbrock import ROS34PW2, RosenbrockW
 from moorjax.dynamics.solvers import SOLVERS, make_solver
+from gradcheck import gradient_and_central_difference
 from scenes import case_b_scene
 
 H = (0.1, 0.05, 0.025, 0.0125)
@@ -146,10 +147,7 @@ def test_ensemble_and_gradient():
         scene = set_parameter(base, "Cd", x)
         return jnp.mean(settings.run(scene, y0).tension_b)
 
-    value_and_grad = jax.jit(jax.value_and_grad(mean_tension))  # one program for all three calls
-    g = float(value_and_grad(jnp.asarray(cd))[1])
-    d = 1e-4 * cd
-    fd = (float(value_and_grad(cd + d)[0]) - float(value_and_grad(cd - d)[0])) / (2 * d)
+    g, fd, _ = gradient_and_central_difference(mean_tension, cd, 1e-4 * cd)
     print("d mean T / d Cd", g, "central difference", fd)
     assert abs(g - fd) < 1e-4 * abs(fd) + 1e-6
 

@@ -28,6 +28,7 @@ import jax
 import jax.numpy as jnp
 
 from .._numerics import safe_norm
+from ..linalg.banded_solver import dense_lu
 from ..model.grouping import map_lines
 from ..model.line import LineState
 
@@ -234,12 +235,10 @@ def stage_factors(t, y, scene, c) -> tuple:
         return factors
     blocks = []
     for i, z in enumerate(y[n:]):
-        def column(e, i=i):  # J·e for e on body i's state only
+        def column(e, i=i):  # (I − c·J)·e for e on body i's state only
             dy = tuple(jnp.zeros_like(x) for x in y)
             dy = dy[:n + i] + (e,) + dy[n + i + 1:]
-            return jax.jvp(lambda w: vector_field(t, w, scene), (y,), (dy,))[1][n + i]
+            return e - c * jax.jvp(lambda w: vector_field(t, w, scene), (y,), (dy,))[1][n + i]
 
-        cols = jax.vmap(column)(jnp.eye(z.shape[0], dtype=z.dtype))  # row k: J·e_k
-        blocks.append(DenseStageFactor(*jax.scipy.linalg.lu_factor(
-            jnp.eye(z.shape[0], dtype=z.dtype) - c * cols.T)))
+        blocks.append(DenseStageFactor(*dense_lu(column, z.shape[0], z.dtype)))
     return factors + tuple(blocks)

@@ -317,9 +317,15 @@ def _init_loose(solver, operator, leaves, treedef):
             full[i] = e
             return jtu.tree_leaves(operator.mv(jtu.tree_unflatten(treedef, full)))[i]
 
-        cols = jax.vmap(column)(jnp.eye(n, dtype=leaves[i].dtype))  # row k = A e_k
-        blocks.append(jax.scipy.linalg.lu_factor(cols.T))
+        blocks.append(dense_lu(column, n, leaves[i].dtype))
     return _LooseState(band, tuple(blocks), False, band_idx, loose_idx, treedef)
+
+
+def dense_lu(apply, n, dtype):
+    """LU factors ``(lu, pivots)`` of the n×n matrix A given by its action
+    ``apply(e) = A·e`` on an (n,) vector: the n columns in one vmapped call."""
+    cols = jax.vmap(apply)(jnp.eye(n, dtype=dtype))  # row k: A·e_k
+    return jax.scipy.linalg.lu_factor(cols.T)
 
 
 def _compute_loose(solver, state, vector):
