@@ -303,10 +303,7 @@ def test_reported_statics_falls_back_to_the_fem_where_no_catenary_applies():
     line, env = build(pile, 80)
     st = AUTO(line, env)
     assert bool(st.converged)
-    # two programs reaching the same equilibrium: equal within the solve's
-    # tolerance (forces to 1e-6 of the tension), not to the last bits (compiled
-    # with XLA's optimisation level 0 they differ by 2.6e-8)
-    assert float(st.tension_b) == pytest.approx(float(SOLVE(line, env).tension_b), rel=1e-6)
+    assert float(st.tension_b) == pytest.approx(float(SOLVE(line, env).tension_b), rel=1e-12)
 
 
 def test_reported_statics_keeps_the_fem_for_what_the_catenary_does_not_model():
