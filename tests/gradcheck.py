@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 def gradient_and_central_difference(fn, x, h):
@@ -25,7 +26,7 @@ def gradient_and_central_difference(fn, x, h):
         return float(value_and_grad(z)[0])
 
     g = value_and_grad(x)[1]
-    if jnp.ndim(h) == 0:
+    if np.ndim(h) == 0:  # h a number, or a sequence of them (not an array for jnp)
         return float(g), (value(x + h) - value(x - h)) / (2 * h), value
     grads, fds = [], []
     for i, hi in enumerate(h):
