@@ -31,7 +31,8 @@ from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
-from ..statics.system import MAX_ITERATIONS, body_forces, line_statics_at, mooring_wrench
+from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces, line_statics_at,
+                              mooring_wrench, newton_step)
 
 
 class Equilibrium(eqx.Module):
@@ -171,12 +172,10 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
 
 
-# a Newton step is halved at most this often before the iteration gives up
-_BACKTRACKS = 6
-
-
 def _body_newton(scene, t, loads, tol, max_iterations):
-    """Damped, backtracking Newton on the bodies' force balance, as one loop whose
+    """Damped, backtracking Newton on the bodies' force balance (the steps of
+    :func:`moorjax.statics.system.newton_step`, the acceptance and halvings of
+    :func:`~moorjax.statics.system.solve_system_statics`' host loop), as one loop whose
     body solves the lines' statics once (warm, linearised for the Jacobian) at a
     trial pose: accepted trials become the base of the next Newton step, rejected
     ones halve the step. One traced copy of the warm line statics keeps the
@@ -193,41 +192,35 @@ def _body_newton(scene, t, loads, tol, max_iterations):
             w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))
             ok = jnp.all(jnp.stack([s.converged for s in st]))
             tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
-            return body_forces(scene, p, t, loads) + w, (_states(st), ok, tens)
+            return body_forces(scene, p, t, loads) + w, (_states(st), ok, tens, st)
 
-        g, jvp_fn, (states, ok, tens) = jax.linearize(imbalance, poses, has_aux=True)
+        g, jvp_fn, (states, ok, tens, st) = jax.linearize(imbalance, poses, has_aux=True)
         jac = jax.vmap(jvp_fn)(eye).reshape(n_dof, n_dof).T
-        return g, jac, states, ok, tens
+        return g, jac, states, ok, tens, st
 
     poses0 = jnp.zeros((nb, 6))
     inits0 = _states(line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
 
-    def newton_step(g, jac):
-        step = jnp.linalg.solve(jac, -g.ravel()).reshape(nb, 6)
-        # damp large rotations and translations (the line statics must stay reachable)
-        big = jnp.maximum(jnp.maximum(jnp.max(jnp.abs(step[:, :3])) / 5.0,
-                                      jnp.max(jnp.abs(step[:, 3:])) / 0.05), 1.0)
-        return jnp.where(jnp.isfinite(step), step / big, 0.0)
-
     def iteration(c):
         (k, newton_its, trial, base, inits, size, jac, step, scale, _, _) = c
-        g, jac_t, states, ok, tens = evaluate(trial, inits)
-        finite = jnp.all(jnp.isfinite(g)) & jnp.all(jnp.isfinite(jac_t))
+        g, jac_t, states, ok, tens, sts = evaluate(trial, inits)
+        finite = jnp.all(jnp.isfinite(g))  # (a non-finite J gets newton_step's regularised step)
         size_t = jnp.max(jnp.abs(g))
         first = newton_its == 0
         # backtracking: seabed contact makes the imbalance kinked, so a full
         # Newton step can overshoot and cycle; a trial is taken when its lines
-        # converged and it reduces the largest force
-        accept = ok & finite & (first | (size_t < size))
+        # converged and its largest force is not larger (by more than
+        # admissible_rise: as the host loop)
         scale = jnp.where(first, jnp.maximum(jnp.maximum(tens, size_t), 1.0), scale)
+        accept = ok & finite & (first | (size_t <= size + admissible_rise(tol, scale, sts)))
         base = jnp.where(accept, trial, base)
         inits = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), states, inits)
         size = jnp.where(accept, size_t, size)
         jac = jnp.where(accept, jac_t, jac)
         converged = accept & (size_t < tol * scale)
-        step = jnp.where(accept, newton_step(jnp.where(finite, g, 0.0), jac), 0.5 * step)
+        step = jnp.where(accept, newton_step(jac, jnp.where(finite, g, 0.0)), 0.5 * step)
         k = jnp.where(accept, 0, k + 1)
-        gave_up = (k >= _BACKTRACKS) | (first & ~accept)
+        gave_up = (k >= HALVINGS) | (first & ~accept)
         newton_its = newton_its + accept
         return (k, newton_its, base + step, base, inits, size, jac, step, scale,
                 converged | gave_up, converged)

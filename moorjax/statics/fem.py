@@ -151,7 +151,7 @@ def _dense_step(fn, y, fy, mu):
     return jnp.linalg.solve(mu * jnp.eye(m) - jac, fy.reshape(-1)).reshape(y.shape)
 
 
-def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step):
+def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None):
     """Regularised Newton with an exact line search on the static energy.
 
     Without a current the static forces are the negative gradient of a convex
@@ -164,6 +164,14 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step):
     change of g(α) = −f(y + αΔy)·Δy, bracketed on α = 1, ½, … (vmapped) and
     interpolated. Touchdown and slack kinks only make g piecewise smooth, so the
     iteration cannot stall on them. Stops when max|f| ≤ tol(y). Returns (y, iterations).
+
+    ``restart`` (a start like ``y0``, or None): where ``y0`` has not converged in
+    half the steps, the rest start from it. A warm start (a neighbouring
+    solution: the system statics' previous pose) can sit where the descent
+    crawls; the catenary guess then converges (MoorDyn's ``seafloor.txt``
+    pendulum: a weightless slack line of EA = 1e9 N, taut at 1e-10 strain below a
+    kink, failed from its last shape at most trial poses and converged from the
+    guess).
     """
     def cond(c):
         _, _, it, done = c
@@ -171,6 +179,8 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step):
 
     def body(c):
         y, fy, it, _ = c
+        if restart is not None:
+            y, fy = lax.cond(it == max_steps // 2, lambda: (restart, fn(restart, None)), lambda: (y, fy))
         mu = jnp.max(jnp.abs(fy)) / soft_length
         dy = step(fn, y, fy, mu)
         dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f
@@ -409,8 +419,10 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
         return jnp.maximum(jnp.minimum(atol, 1e-8 * scale(y) / k), floor(y))
 
     banded = line.banded_jacobian
+    # from ``init``, the catenary guess once half the steps did not converge
+    restart = None if init is None else lax.stop_gradient(initial_guess(line, env, t).r)
     r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
-                                     _band_step if banded else _dense_step)
+                                     _band_step if banded else _dense_step, restart)
     solver = (optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver()) if banded
               else optx.Newton(rtol=rtol, atol=atol))
     sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)

@@ -122,7 +122,8 @@ def _newton_parts(scene, poses, t, loads, inits, methods):
 #: :func:`moorjax.dynamics.initial.equilibrium_state`): where a body or point is
 #: held only by a slack line, the regularised steps move it a bounded distance
 #: each; MoorDyn's ``seafloor.txt`` point sliding 16 m down a frictionless slope
-#: took 105 iterations on one machine, under 50 on another
+#: takes 15–16 iterations (105, or more than 200, before the lines' statics
+#: restarted from the catenary guess: see :func:`admissible_rise`)
 MAX_ITERATIONS = 200
 
 
@@ -181,26 +182,47 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
 #: step halvings the system Newton tries before it gives up on an iteration: enough
 #: for a regularised step of 1 m to come down to the 0.5 mm a seabed contact
 #: (kBot·d·l ≈ 2e5 N/m) allows for a 100 N load
-_HALVINGS = 20
+HALVINGS = 20
 
 
-def _newton_step(jac, g):
-    """The Newton step −J⁻¹g on the poses; where J is singular or undefined (a point on
-    slack weightless lines has no stiffness, and such a line's shape, hence its
-    implicit derivative, is undetermined) a regularised step (μI − J)Δη = g with
-    μ = |g|max per metre (translations) or per 0.05 rad (rotations), which moves
-    along the net force where J = 0 and becomes Newton's step as g vanishes."""
-    g = g.ravel()
-    try:
-        step = np.linalg.solve(jac, -g)
-        if np.all(np.isfinite(step)) and np.linalg.cond(jac) < 1e12:
-            return step
-    except np.linalg.LinAlgError:
-        pass
-    jac = np.where(np.isfinite(jac), jac, 0.0)
-    scale = max(float(np.max(np.abs(g))), 1e-300)
-    mu = np.tile(np.array([scale / 1.0] * 3 + [scale / 0.05] * 3), g.size // 6)
-    return np.linalg.solve(np.diag(mu) - jac, g)
+def admissible_rise(tol, scale, lines) -> Array:
+    """How much larger [N] a trial pose's largest force imbalance may be than the
+    last one's for the trial to be taken: the convergence tolerance tol × scale
+    plus twice the largest force imbalance left inside the trial's lines (their
+    end forces are known to about that). A point sliding where nothing holds it
+    (a slack line, a frictionless slope) moves along an unchanged force, which
+    the lines' statics give only to within their tolerance: MoorDyn's
+    ``seafloor.txt`` pendulum (a weightless line of EA = 1e9 N, whose statics
+    resolve 7e-3 N) near its equilibrium, 45.5356 N, trials 1e-6…1e-3 N more:
+    with no rise allowed the compiled iteration stopped 0.3 m short, the host
+    loop took 105 iterations."""
+    resid = jnp.max(jnp.stack([jnp.max(x.max_residual) for x in lines]))
+    return tol * scale + 2.0 * resid
+
+
+@jax.jit
+def newton_step(jac, g):
+    """The damped Newton step (n_bodies, 6) on the poses from the imbalance g
+    (n_bodies, 6) and its Jacobian J = ∂g/∂η: −J⁻¹g; where J is singular or
+    undefined (a point on slack weightless lines has no stiffness, and such a
+    line's shape, hence its implicit derivative, is undetermined: condition
+    number 1e12 or more, or a non-finite step) a regularised step (μI − J)Δη = g
+    with μ = |g|max per metre (translations) or per 0.05 rad (rotations), which
+    moves along the net force where J = 0 and becomes Newton's step as g
+    vanishes. Scaled to at most 5 m and 0.05 rad (the lines' statics must stay
+    reachable from their last shapes). One traced function for the host loop
+    here and the compiled one of :func:`moorjax.dynamics.initial.equilibrium_state`."""
+    nb = g.shape[0]
+    g = jnp.ravel(g)
+    step = jnp.linalg.solve(jac, -g)
+    regular = jnp.all(jnp.isfinite(step)) & (jnp.linalg.cond(jac) < 1e12)
+    scale = jnp.maximum(jnp.max(jnp.abs(g)), 1e-300)
+    mu = scale / jnp.tile(jnp.array([1.0] * 3 + [0.05] * 3), nb)
+    relaxed = jnp.linalg.solve(jnp.diag(mu) - jnp.where(jnp.isfinite(jac), jac, 0.0), g)
+    step = jnp.where(regular, step, relaxed).reshape(nb, 6)
+    big = jnp.maximum(jnp.maximum(jnp.max(jnp.abs(step[:, :3])) / 5.0,
+                                  jnp.max(jnp.abs(step[:, 3:])) / 0.05), 1.0)
+    return jnp.where(jnp.isfinite(step), step / big, 0.0)
 
 
 def _ends_above_bed(scene, out) -> bool:
@@ -213,7 +235,6 @@ def _ends_above_bed(scene, out) -> bool:
 
 
 def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> SystemStatics:
-    nb = len(scene.bodies)
     t = as_float(t)
     scale = None
     converged = False
@@ -232,14 +253,11 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
         if np.max(np.abs(g_np)) < tol * scale:
             converged = True
             break
-        step = _newton_step(np.asarray(jac), g_np).reshape(nb, 6)
-        # damp large rotations and translations (the line statics must stay reachable)
-        big = max(np.max(np.abs(step[:, :3])) / 5.0, np.max(np.abs(step[:, 3:])) / 0.05, 1.0)
+        step = np.asarray(newton_step(jac, g))
         # backtracking: seabed contact makes the imbalance kinked, so a full
         # Newton step can overshoot and cycle
-        step = step / big
         size = np.max(np.abs(g_np))
-        for _ in range(_HALVINGS):
+        for _ in range(HALVINGS):
             trial = poses + jnp.asarray(step)
             new = line_statics_at(scene, trial, t, inits, methods)
             if not all(bool(x.converged) for x in new):
@@ -252,9 +270,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
                 ends = [(x.force_a, x.force_b) for x in new]
                 w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(trial), ends))
                 g_trial = np.asarray(body_forces(scene, trial, t, loads) + w)
-                # not larger: a point sliding where nothing holds it (a slack line,
-                # a frictionless slope) moves along an unchanged force
-                if np.max(np.abs(g_trial)) <= size * (1.0 + 1e-9):
+                if np.max(np.abs(g_trial)) <= size + float(admissible_rise(tol, scale, new)):
                     break
             step = 0.5 * step
         if not ok:  # no trial step was admissible: stop at the last good poses
