@@ -190,13 +190,13 @@ def _body_newton(scene, t, loads, tol, max_iterations):
             st = line_statics_at(scene, p, t, inits)
             ends = [(s.force_a, s.force_b) for s in st]
             w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))
-            ok = jnp.all(jnp.stack([s.converged for s in st]))
-            tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
-            return body_forces(scene, p, t, loads) + w, (_states(st), ok, tens, st)
+            return body_forces(scene, p, t, loads) + w, st
 
-        g, jvp_fn, (states, ok, tens, st) = jax.linearize(imbalance, poses, has_aux=True)
+        g, jvp_fn, st = jax.linearize(imbalance, poses, has_aux=True)
         jac = jax.vmap(jvp_fn)(eye).reshape(n_dof, n_dof).T
-        return g, jac, states, ok, tens, st
+        ok = jnp.all(jnp.stack([s.converged for s in st]))
+        tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
+        return g, jac, _states(st), ok, tens, st
 
     poses0 = jnp.zeros((nb, 6))
     inits0 = _states(line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))

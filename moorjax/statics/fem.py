@@ -177,10 +177,14 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None)
         _, _, it, done = c
         return (it < max_steps) & jnp.invert(done)
 
+    if restart is not None:
+        f_restart = fn(restart, None)  # once, not per step (a cond on a vmapped count runs both sides)
+
     def body(c):
         y, fy, it, _ = c
         if restart is not None:
-            y, fy = lax.cond(it == max_steps // 2, lambda: (restart, fn(restart, None)), lambda: (y, fy))
+            now = it == max_steps // 2
+            y, fy = jnp.where(now, restart, y), jnp.where(now, f_restart, fy)
         mu = jnp.max(jnp.abs(fy)) / soft_length
         dy = step(fn, y, fy, mu)
         dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f

@@ -501,6 +501,26 @@ def graded_mesh(length: float, n: int, start: float, end: float, first: float,
     return np.concatenate(sizes) / length
 
 
+class UnresolvedTouchdownWarning(UserWarning):
+    """A Hermite line's touchdown bends within a small part of an element
+    (:func:`touchdown_mesh`): its static end tensions are unreliable."""
+
+
+def _warn_unresolved(line: Line, scale):
+    """Warn that ``line``'s touchdown, bending over ``scale`` = H/w [m], is
+    sharper than its elements resolve (:data:`SHARP` of a mean element)."""
+    import warnings
+
+    n, mean = line.n_segments, float(line.length) / line.n_segments
+    needed = int(np.ceil(SHARP * float(line.length) / scale))
+    warnings.warn(
+        f"line {line.label}: its touchdown bends within H/w = {scale:.3g} m, {scale / mean:.3f} of "
+        f"a mean element ({mean:.3g} m); {n} Hermite elements do not resolve it (below {SHARP} of an "
+        f"element), and its static end tensions, the grounded end's most, are unreliable (drawn lines: "
+        f"0.3-26 % off the analytic catenary). Use about {needed} elements or more.",
+        UnresolvedTouchdownWarning, stacklevel=3)
+
+
 def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 1e-3,
                    min_element: float = 0.05) -> Line:
     """The line with its Hermite elements graded about its static touchdown.
@@ -543,52 +563,6 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     once when building a scene, before ``solve_line_statics`` and ``simulate``;
     the mesh is a value of the line (changing it does not recompile).
     """
-    graded = _touchdown_mesh(line, env, t, iterations, tol, min_element)
-    _warn_if_unresolved(graded, env, t)
-    return graded
-
-
-class UnresolvedTouchdownWarning(UserWarning):
-    """A Hermite line's touchdown bends within a small part of an element
-    (:func:`touchdown_mesh`): its static end tensions are unreliable."""
-
-
-def _warn_if_unresolved(line: Line, env, t):
-    """Warn where a grounded Hermite line's static touchdown bends within
-    :data:`SHARP` of a mean element (its catenary parameter H/w, H from its
-    suspended end's horizontal pull)."""
-    import warnings
-
-    from ..element.hermite import HermiteElement
-    from .fem import solve_line_statics
-
-    if env.seabed is None or not isinstance(line.element, HermiteElement):
-        return
-    w = float(line.line_type.wet_weight(env.rho, env.g))
-    if w <= 0.0:  # a buoyant line (not graded)
-        return
-    env_static = env.without_waves()
-    height_a, height_b = (float(x) for x in _end_heights(line, env_static, jnp.asarray(t, float)))
-    tol_z = 1e-6 * max(float(env.depth), 1.0)
-    on_a, on_b = height_a <= tol_z, height_b <= tol_z
-    st = solve_line_statics(line, env_static, t, throw=False)
-    if not bool(st.converged) or float(st.grounded_length) <= 0.0:
-        return
-    n, mean = line.n_segments, float(line.length) / line.n_segments
-    pull = _horizontal_pull(st, on_a, on_b)
-    if pull is None or pull / w >= SHARP * mean:
-        return
-    needed = int(np.ceil(SHARP * float(line.length) * w / pull))
-    warnings.warn(
-        f"line {line.label}: its touchdown bends within H/w = {pull / w:.3g} m, {pull / w / mean:.3f} of "
-        f"a mean element ({mean:.3g} m); {n} Hermite elements do not resolve it (below {SHARP} of an "
-        f"element), and its static end tensions, the grounded end's most, are unreliable (drawn lines: "
-        f"0.3-26 % off the analytic catenary). Use about {needed} elements or more.",
-        UnresolvedTouchdownWarning, stacklevel=3)
-
-
-def _touchdown_mesh(line, env, t, iterations, tol, min_element):
-    """:func:`touchdown_mesh` without its check."""
     from ..element.hermite import HermiteElement
     from .fem import solve_line_statics
 
@@ -607,6 +581,14 @@ def _touchdown_mesh(line, env, t, iterations, tol, min_element):
     if (on_a and on_b) or w <= 0.0:
         return line  # both ends on the bed (not graded), or a buoyant line
     history, best, here = [], line, None  # best: the last mesh whose statics converged
+    last = None  # the last converged statics: best's, or the fine linear element's first
+
+    def finish():
+        """``best``, with the warning where its touchdown stays unresolved."""
+        if last is not None and float(last.grounded_length) > 0.0 and _sharp(last, on_a, on_b, w, mean):
+            _warn_unresolved(line, _horizontal_pull(last, on_a, on_b) / w)
+        return best
+
     for _ in range(iterations + 1):
         st = solve_line_statics(current, env_static, t, throw=False)
         ok = bool(st.converged) and bool(jnp.all(jnp.isfinite(st.rest_state.r)))
@@ -616,11 +598,12 @@ def _touchdown_mesh(line, env, t, iterations, tol, min_element):
             st = solve_line_statics(_fine_linear(line), env_static, t, throw=False)
             ok = bool(st.converged)
         if not ok:
-            return best
+            return finish()
+        last = st
         if here is not None:
             best = current
         if float(st.grounded_length) < min_element * mean:
-            return best  # off the bed (not graded)
+            return finish()  # off the bed (not graded)
         # a suspended stretch's unstretched length is its end's vertical pull
         # over the weight (the bed carries the rest): exact for a flat,
         # frictionless bed without current, and a smooth functional of the
@@ -631,12 +614,12 @@ def _touchdown_mesh(line, env, t, iterations, tol, min_element):
         start = 0.0 if on_a else abs(fa[2]) / w
         end = length if on_b else length - abs(fb[2]) / w
         if not end - start > min_element * mean:
-            return best
+            return finish()
         knots = np.array([start, end])
         inner = np.array([not on_a, not on_b])  # the knots inside the line
         if here is not None:
             if np.all(np.abs(knots - here)[inner] < tol * mean):
-                return best
+                return finish()
             history.append((here, knots - here))  # the mesh's knots, and estimates − knots
         if len(history) >= 2:  # secant steps on estimate − knot (the plain iteration oscillates)
             (x0, f0), (x1, f1) = history[-2:]
@@ -647,4 +630,4 @@ def _touchdown_mesh(line, env, t, iterations, tol, min_element):
         graded = eqx.tree_at(lambda ln: ln.element.mesh, current,
                              jnp.asarray(graded_mesh(length, n, knots[0], knots[1], first)))
         current, here = graded, knots
-    return best
+    return finish()
