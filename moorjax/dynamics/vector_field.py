@@ -29,6 +29,7 @@ import jax.numpy as jnp
 
 from .._numerics import safe_norm
 from ..linalg.banded_solver import dense_lu
+from ..linalg.ordering import after
 from ..model.grouping import map_lines
 from ..model.line import LineState
 
@@ -234,11 +235,12 @@ def stage_factors(t, y, scene, c) -> tuple:
     if not scene.bodies:
         return factors
     blocks = []
-    for i, z in enumerate(y[n:]):
+    y_after = after(y, factors)  # one batched LAPACK call at a time (linalg.ordering)
+    for i, z in enumerate(y_after[n:]):
         def column(e, i=i):  # (I − c·J)·e for e on body i's state only
             dy = tuple(jnp.zeros_like(x) for x in y)
             dy = dy[:n + i] + (e,) + dy[n + i + 1:]
-            return e - c * jax.jvp(lambda w: vector_field(t, w, scene), (y,), (dy,))[1][n + i]
+            return e - c * jax.jvp(lambda w: vector_field(t, w, scene), (y_after,), (dy,))[1][n + i]
 
         blocks.append(DenseStageFactor(*dense_lu(column, z.shape[0], z.dtype)))
     return factors + tuple(blocks)

@@ -61,6 +61,7 @@ import numpy as np
 from jaxtyping import Array
 
 from .._numerics import safe_norm
+from ..linalg.ordering import after
 from .hermite import (H, WQ, HermiteDofs, clamped_slopes, element_fields, element_lengths,
                       extensibility, extensibility_jacobian, generalized_forces)
 
@@ -252,13 +253,19 @@ def dynamics(line, env, t, q):
     # follow the ends' accelerations); a clamped slope accelerates along its clamp only
     cols = jnp.concatenate([rhs[:, None], m_fp], axis=1)
     clamps = clamped_slopes(line, t)
+    # one batched LAPACK call at a time (moorjax.linalg.ordering): the mass
+    # matrix is factored after the forces (and their tension field's solve), and
+    # the mass depends (by zero) on the forces, also in derivatives: a
+    # derivative's solve, M⁻¹(db − dM·x), then waits for the value's x (with dM
+    # exactly zero lax.custom_linear_solve would solve M⁻¹db beside it)
+    me_after = after(me, cols)
     if clamps:
-        sol = _clamped_solve(_assemble(me)[np.ix_(fi, fi)], cols, fi, clamps)
+        sol = _clamped_solve(_assemble(me_after)[np.ix_(fi, fi)], cols, fi, clamps)
     else:
         def m_ff(x):  # M_ff·x through the element blocks
-            return _mass_apply(me, jnp.zeros((size, x.shape[1]), x.dtype).at[fi].set(x))[fi]
+            return _mass_apply(me_after, jnp.zeros((size, x.shape[1]), x.dtype).at[fi].set(x))[fi]
 
-        sol = _spd_solve(m_ff, _assemble(lax.stop_gradient(me))[np.ix_(fi, fi)], cols)
+        sol = _spd_solve(m_ff, _assemble(lax.stop_gradient(me_after))[np.ix_(fi, fi)], cols)
     a_f, s = sol[:, 0], sol[:, 1:]
     a = jnp.zeros(size).at[fi].set(a_f).at[pi].set(a_p).reshape(2 * n + 2, 3)
     return a, f, me, m_cp, dofs, tension, s

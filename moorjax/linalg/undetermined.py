@@ -32,6 +32,8 @@ import jax.scipy.linalg
 import jax.numpy as jnp
 import lineax as lx
 
+from .ordering import after
+
 
 class MinimumNorm(lx.AbstractLinearSolver):
     """LU where the matrix is regular, else the minimum-norm least-squares
@@ -63,11 +65,16 @@ class MinimumNorm(lx.AbstractLinearSolver):
         a, lu, piv, regular, structure = state
         b, _ = jax.flatten_util.ravel_pytree(vector)
 
+        x_lu = jax.scipy.linalg.lu_solve((lu, piv), b)
+
         def least_squares():
-            safe = jnp.where(jnp.isfinite(a), a, 0.0)
+            # after the LU solve: batched (vmap over lines turns the cond into a
+            # select), the SVD and the LU kernels must not run at once (.ordering)
+            a_seq = after(a, x_lu)
+            safe = jnp.where(jnp.isfinite(a_seq), a_seq, 0.0)
             return jnp.linalg.pinv(safe, rtol=self.rcond) @ b
 
-        x = lax.cond(regular, lambda: jax.scipy.linalg.lu_solve((lu, piv), b), least_squares)
+        x = lax.cond(regular, lambda: x_lu, least_squares)
         x = jnp.where(jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(a)), x, jnp.zeros_like(x))
         _, unravel = jax.flatten_util.ravel_pytree(_zeros(structure))
         return unravel(x), lx.RESULTS.successful, {}

@@ -20,6 +20,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..linalg.ordering import after
+
 
 def _stackable(x):
     return eqx.is_array(x) or isinstance(x, (float, int, complex, np.generic))
@@ -77,21 +79,31 @@ def map_lines(fn, lines, *per_line):
     """``tuple(fn(line, *args) for line, *args in zip(lines, *per_line))``, with
     the lines of one structure (and arguments of one structure) computed by one
     vmapped call. ``fn`` must be vmappable (``lax`` loops, no Python branching on
-    values). A group of one is called directly."""
+    values). A group of one is called directly.
+
+    The groups run one after the other (:func:`~moorjax.linalg.ordering.after`,
+    values unchanged): a line's solve or dynamics factorises, and two batched
+    LAPACK calls running at once can hang jaxlib 0.10's CPU thread pool."""
     lines = tuple(lines)
     per_line = [tuple(a) for a in per_line]
     out = [None] * len(lines)
+    previous = None  # the last group's answers
     for members in line_groups(lines, *per_line):
         rows = [tuple(a[i] for a in per_line) for i in members]
+        group = [lines[i] for i in members]
+        if previous is not None:
+            group, rows = after((group, rows), previous)
         if len(members) == 1:
-            out[members[0]] = fn(lines[members[0]], *rows[0])
+            out[members[0]] = fn(group[0], *rows[0])
+            previous = out[members[0]]
             continue
         # every member rebuilt with the first one's static fields (labels differ)
-        treedef = jax.tree_util.tree_structure(lines[members[0]], is_leaf=lambda x: x is None)
+        treedef = jax.tree_util.tree_structure(group[0], is_leaf=lambda x: x is None)
         same = [jax.tree_util.tree_unflatten(
-            treedef, jax.tree_util.tree_leaves(lines[i], is_leaf=lambda x: x is None))
-            for i in members]
+            treedef, jax.tree_util.tree_leaves(line, is_leaf=lambda x: x is None))
+            for line in group]
         batched = eqx.filter_vmap(fn)(_stack(same), *_stack(rows))
         for k, i in enumerate(members):
             out[i] = _unstack(batched, k)
+        previous = batched
     return tuple(out)

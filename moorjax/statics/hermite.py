@@ -27,6 +27,7 @@ from .._numerics import safe_norm
 from ..element.hermite import (HermiteDofs, clamped_slopes, element_fields, element_lengths,
                                extensibility, generalized_forces, quadrature_weights, static_residual)
 from ..element.hermite_motion import HermiteState, static_state
+from ..linalg.ordering import after
 from ..model.line import Line
 
 
@@ -238,7 +239,7 @@ def _damped_newton(fn, y0, atol, max_steps):
         dx = jnp.where(jnp.all(jnp.isfinite(dx)), dx, 0.0)
         # Levenberg–Marquardt directions (descent directions of |f|² where the
         # Newton step is not one: across a kink of the contact law)
-        jtj, jtf = jac.T @ jac, jac.T @ fx
+        jtj, jtf = after(jac.T @ jac, dx), jac.T @ fx  # one batched LU at a time (linalg.ordering)
         scale = jnp.mean(jnp.diag(jtj))
         lm = jax.vmap(lambda m: -jnp.linalg.solve(jtj + m * scale * jnp.eye(x.size), jtf))(mus)
         steps = jnp.concatenate([alphas[:, None] * dx, jnp.where(jnp.isfinite(lm), lm, 0.0)])
