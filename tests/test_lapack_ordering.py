@@ -111,8 +111,8 @@ def test_hermite_point_dynamics_run_one_batched_lapack_call_at_a_time(lines):
     groups, each with its own factorisations. Before the ordering, the step loop
     of one structure held dozens of independent pairs (the consistent mass's
     Cholesky in the vector field beside the one in its derivative, their
-    triangular solves, the stage factors' 6×6 inverses). The pairs at the
-    start of a run are left (see the end)."""
+    triangular solves, the stage factors' 6×6 inverses). The pairs before the
+    loop, in a branch a run never takes, are left (see the end)."""
     from moorjax.dynamics.initial import catenary_state
     from moorjax.dynamics.simulate import _integrate, plan
     from moorjax.dynamics.vector_field import pack
@@ -129,7 +129,9 @@ def test_hermite_point_dynamics_run_one_batched_lapack_call_at_a_time(lines):
     pairs = concurrent_lapack(text)
     # every step (the loops' bodies): one batched call at a time
     assert [p for p in pairs if p[0] != entry] == []
-    # known, left: once at the start, diffrax's save of the t0 outputs (a
-    # conditional) and its first vector-field evaluation are independent
+    # left: before the loop, diffrax's branch for t1 == t0 (save the outputs
+    # without stepping; a conditional on t0 == t1, checked in the HLO) is
+    # independent of the first vector-field evaluation. A run never takes it:
+    # plan() requires the last output time after t0
     assert all("cond" in p[1] or "cond" in p[2] for p in pairs), pairs
     assert len(pairs) <= 3, pairs
