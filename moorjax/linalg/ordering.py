@@ -14,9 +14,9 @@ Two factorisations of the same matrix, or of independent ones, in one function
 are exactly that: independent. :func:`after` makes one wait for the other, so
 that at most one batched kernel of the function runs at a time. It costs one
 element of each dependency and an addition, and the lost overlap (the kernels are
-small). A larger pool (``PJRT_NPROC``) would also avoid the hang but made a
-simulation 15–25 % slower on 2 cores (measured, case A, 3 runs each), so it is
-not set.
+small). A larger pool (``PJRT_NPROC``) would make the hang rarer but made case A
+15–25 % slower on 2 cores (interleaved runs, ``benchmarks/README.md``, session
+21), so it is not set.
 
 ``tests/test_lapack_ordering.py`` checks compiled programs for batched LAPACK
 calls that may still run at the same time.
