@@ -73,6 +73,7 @@ def test_after_changes_no_value_and_no_derivative():
     deps = (jnp.array([jnp.nan, 1.0]), jnp.array(jnp.inf), jnp.array([1, 2]))
     out = after(x, *deps)
     np.testing.assert_array_equal(out["a"], x["a"])
+    np.testing.assert_array_equal(np.signbit(out["a"]), np.signbit(x["a"]))  # −0 stays −0
     assert out["n"].dtype == x["n"].dtype and out["s"] is None
 
     f = lambda a, d: jnp.sum(after(a, d) ** 2)  # noqa: E731

@@ -24,6 +24,8 @@ calls that may still run at the same time.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -33,16 +35,18 @@ def after(x, *deps):
     """``x`` (a pytree; its float arrays), computed only once every float array
     in ``deps`` is; the same for their derivatives.
 
-    A data dependency XLA keeps: zero times one element of each dependency
-    (made finite) is added to every float array of ``x``. It carries into
-    derivatives as well (a tangent or cotangent of ``x`` waits for those of
-    ``deps``) and adds nothing to their values. ``lax.optimization_barrier``
-    would not do: XLA:CPU removes it before it schedules, so it orders nothing
-    at run time."""
-    picks = [jnp.ravel(d)[0] for d in jax.tree.leaves(deps) if _floats(d) and d.size]
-    if not picks:
+    A data dependency XLA keeps: a negative zero computed from one element of
+    each dependency (made finite) is added to every float array of ``x``;
+    adding −0 leaves every value as it is, bit for bit (a +0 would turn −0 into
+    +0). It carries into derivatives as well (a tangent or cotangent of ``x``
+    waits for those of ``deps``) and adds nothing to their values.
+    ``lax.optimization_barrier`` would not do: XLA:CPU removes it before it
+    schedules, so it orders nothing at run time."""
+    zeros = [-(jnp.abs(jnp.where(jnp.isfinite(e), e, 0.0)) * 0.0)
+             for e in (jnp.ravel(d)[0] for d in jax.tree.leaves(deps) if _floats(d) and d.size)]
+    if not zeros:
         return x
-    zero = sum(jnp.where(jnp.isfinite(e), e, 0.0) * 0.0 for e in picks)
+    zero = functools.reduce(jnp.add, zeros)
 
     return jax.tree.map(lambda a: a + zero.astype(a.dtype) if _floats(a) else a, x)
 
