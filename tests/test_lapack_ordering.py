@@ -1,12 +1,13 @@
-"""No two batched LAPACK calls of the bodies' static solves may run at once
+"""No two batched LAPACK calls of a compiled program may run at once
 (:mod:`moorjax.linalg.ordering`: jaxlib 0.10's batched kernels deadlock XLA:CPU's
 thread pool when as many run at once as it has threads).
 
 The check reads the optimised HLO of the compiled programs
 (:mod:`hlo_concurrency`): the system statics' Newton linearisation
 (``_newton_parts``) and the compiled equilibrium iteration that starts a
-simulation (``_body_equilibrium``), for a point on three lines of each element.
-Before :func:`~moorjax.linalg.ordering.after` ordered them, the line statics'
+simulation (``_body_equilibrium``), for a point on three lines of each element,
+and the time integration of a point on Hermite lines. Before
+:func:`~moorjax.linalg.ordering.after` ordered them, the line statics'
 minimum-norm derivative solve (:class:`~moorjax.linalg.undetermined.MinimumNorm`)
 ran its LU and its SVD side by side: the pair gdb found in the hung test run.
 """
@@ -33,11 +34,13 @@ ENV = mj.Environment(200.0, seabed=None)
 ANCHORS = [np.array([300 * np.cos(a), 300 * np.sin(a), -200.0]) for a in (0, 2 * np.pi / 3, 4 * np.pi / 3)]
 
 
-def point_scene(element):
+def point_scene(element, segments=(6, 6, 6)):
+    """A buoyant point on three lines from anchors 300 m away (``segments``:
+    each line's element count; unequal counts are separate line groups)."""
     point = ConnectionPoint(2e4, [0, 0, -40.0], volume=60.0)
-    lines = [mj.Line(LT, 330.0, 6, mj.FixedEnd(a), mj.BodyEnd(0, [0, 0, 0]), element=element,
+    lines = [mj.Line(LT, 330.0, n, mj.FixedEnd(a), mj.BodyEnd(0, [0, 0, 0]), element=element,
                      label=str(i + 1))
-             for i, a in enumerate(ANCHORS)]
+             for i, (n, a) in enumerate(zip(segments, ANCHORS))]
     return mj.Scene(lines, ENV, bodies=[point])
 
 
@@ -118,10 +121,7 @@ def test_hermite_point_dynamics_run_one_batched_lapack_call_at_a_time(lines):
     from moorjax.dynamics.simulate import _integrate, plan
     from moorjax.dynamics.vector_field import pack
 
-    point = ConnectionPoint(2e4, [0, 0, -40.0], volume=60.0)
-    scene = mj.Scene([mj.Line(LT, 330.0, n, mj.FixedEnd(a), mj.BodyEnd(0, [0, 0, 0]),
-                              element=HermiteElement(), label=str(i + 1))
-                      for i, (n, a) in enumerate(zip(lines, ANCHORS))], ENV, bodies=[point])
+    scene = point_scene(HermiteElement(), lines)
     settings = plan(1.0, scene=scene)
     y0 = pack(catenary_state(scene).state)
     text = _integrate.jitted.lower(scene, y0, settings, count=False).compile().compiled.as_text()
