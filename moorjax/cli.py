@@ -55,7 +55,7 @@ def cmd_statics(args) -> int:
     _, scene, _ = load(args)
     if scene.bodies:
         # free points and bodies move to their equilibrium with the lines
-        from .statics.system import solve_system_statics
+        from .statics.system import imbalance_report, solve_system_statics
 
         if args.method == "catenary":
             from .io.errors import InputError
@@ -67,7 +67,9 @@ def cmd_statics(args) -> int:
             raise RuntimeError(
                 "system statics (free points and bodies with their lines) did not converge: "
                 f"force imbalance {float(np.max(np.abs(np.asarray(system.residual)))):.3g} N "
-                f"after {system.iterations} Newton iterations; a run can still start as MoorDyn's "
+                f"after {system.iterations} Newton iterations ("
+                + imbalance_report(scene, system.poses, system.residual, system.mooring)
+                + "); a run can still start as MoorDyn's "
                 "does with TmaxIC = 0, from each line's own static shape with the points and bodies "
                 "where the deck puts them: moorjax simulate DECK --initial catenary")
         statics = system.lines

@@ -333,3 +333,37 @@ def test_drag_sees_the_wave_velocity_at_the_reference_point():
     assert np.linalg.norm(u) > 0.1
     np.testing.assert_allclose(acc * 2.0e3, drag, rtol=1e-10)
     assert np.all(np.asarray(body.rate(t, z, jnp.zeros(6)))[6:9] == 0.0)  # no env: still water
+
+
+def test_an_unbalanced_body_is_described_by_its_loads():
+    """The words of an unconverged body equilibrium (``body_free.dat``: a body
+    453.6 kN heavier than the water it displaces, fully submerged, on chains
+    from anchors on the bed, has none above the seabed): the force left, its
+    vertical split into the body's own loads and its lines', a body sunk through
+    the seabed, and a vertical balance nothing can meet."""
+    from moorjax.statics.system import SUNK_MARGIN, imbalance_report, sunk_bodies
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(FREE))
+    own = np.asarray(scene.bodies[0].mean_load(jnp.zeros(6), 0.0, scene.env))
+    np.testing.assert_allclose(own[2], -(2.0e5 - 1025.0 * 150.0) * 9.80665, rtol=1e-12)
+    depth, z0 = float(scene.env.depth), float(scene.bodies[0].origin[2])
+    held = np.array([[1.0, -2.0, -40.0, 0.01, 0.02, 0.0]])
+    sunk = held.copy()
+    sunk[0, 2] = -depth - z0 - SUNK_MARGIN - 0.5
+    assert not bool(sunk_bodies(scene, held)[0]) and bool(sunk_bodies(scene, sunk)[0])
+    at_bed = held.copy()
+    at_bed[0, 2] = -depth - z0 - 0.5 * SUNK_MARGIN  # below the bed, within the margin
+    assert not bool(sunk_bodies(scene, at_bed)[0])
+
+    lines = np.array([[0.0, 0.0, 5.8e4, -3.4e5, 0.0, 0.0]])  # the lines hold it up in part
+    text = imbalance_report(scene, held, lines + own, lines)
+    assert "body B1: force (" in text and f"{own[2]:.4g} N from its own loads" in text
+    assert "5.8e+04 N from its lines" in text and "nothing holds" not in text
+    down = np.array([[0.0, 0.0, -1.0e4, 0.0, 0.0, 0.0]])  # slack chains hanging from it
+    text = imbalance_report(scene, sunk, down + own, down)
+    assert "sank through the seabed" in text and "nothing holds it up" in text
+    assert f"pull it down by {-own[2]:.4g} N and its lines by 1e+04 N" in text
+    up = np.array([[0.0, 0.0, 1.0e4, 0.0, 0.0, 0.0]])  # a buoyant body (own loads upward)
+    assert "nothing holds it down" in imbalance_report(scene, held, up - own, up)

@@ -31,8 +31,9 @@ from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
-from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces, line_statics_at,
-                              mooring_wrench, newton_step)
+from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces,
+                              imbalance_report, line_statics_at, mooring_wrench, newton_step,
+                              sunk_bodies)
 
 
 class Equilibrium(eqx.Module):
@@ -45,12 +46,16 @@ class Equilibrium(eqx.Module):
         converged: whether every line's solve and (with bodies) the bodies'
             force balance converged.
         poses: (n_bodies, 6) body poses η [m, rad] (``None`` without bodies).
+        imbalance, mooring: (n_bodies, 6) force and moment left on each body, and
+            the lines' part of it, at ``poses`` [N, N·m] (``None`` without bodies).
     """
 
     state: tuple
     lines_converged: Array
     converged: Array
     poses: Array | None = None
+    imbalance: Array | None = None
+    mooring: Array | None = None
 
 
 def check_geometry(scene, t0=0.0):
@@ -162,14 +167,16 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     # is exactly zero but whose derivative is that (J is the iteration's last
     # Jacobian, at the solution; its own derivative does not enter since G = 0)
     nb = len(scene_d.bodies)
-    g = body_forces(scene_d, poses, t, loads) + mooring_wrench(scene_d, poses, t, inits)
+    wrench = mooring_wrench(scene_d, poses, t, inits)
+    g = body_forces(scene_d, poses, t, loads) + wrench
     delta = -jnp.linalg.solve(jac, g.ravel()).reshape(nb, 6)
     tangent = delta - jax.lax.stop_gradient(delta)
     poses = poses + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
     st = line_statics_at(scene_d, poses, t, inits)
     lines_ok = jnp.stack([s.converged for s in st])
     state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
-    return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses)
+    return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses,
+                       jax.lax.stop_gradient(g), jax.lax.stop_gradient(wrench))
 
 
 def _body_newton(scene, t, loads, tol, max_iterations):
@@ -220,7 +227,8 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         converged = accept & (size_t < tol * scale)
         step = jnp.where(accept, newton_step(jac, jnp.where(finite, g, 0.0)), 0.5 * step)
         k = jnp.where(accept, 0, k + 1)
-        gave_up = (k >= HALVINGS) | (first & ~accept)
+        # a body that sank through the seabed has no equilibrium (no body contact)
+        gave_up = (k >= HALVINGS) | (first & ~accept) | jnp.any(sunk_bodies(scene, base))
         newton_its = newton_its + accept
         return (k, newton_its, base + step, base, inits, size, jac, step, scale,
                 converged | gave_up, converged)
@@ -245,8 +253,10 @@ def not_converged_message(scene, eq: Equilibrium) -> str:
         return (f"the static solve of line(s) {', '.join(bad)} did not converge (Newton failed "
                 "or left a force imbalance); check the geometry (can the line reach its ends?), "
                 "or give `init`")
+    why = ("" if eq.imbalance is None else
+           ": " + imbalance_report(scene, eq.poses, eq.imbalance, eq.mooring))
     return ("the bodies' static equilibrium did not converge (force imbalance left after the "
-            "Newton iterations); check the bodies' loads and lines, give `init`, or start as "
+            f"Newton iterations{why}); check the bodies' loads and lines, give `init`, or start as "
             "MoorDyn does with TmaxIC = 0, from each line's own static shape with the points and "
             "bodies where the scene puts them: init='catenary' (command line: --initial catenary)")
 

@@ -127,6 +127,63 @@ def _newton_parts(scene, poses, t, loads, inits, methods):
 MAX_ITERATIONS = 200
 
 
+#: how far [m] below the seabed under it a body's reference point may go before
+#: the bodies' statics stop: bodies have no seabed contact, so a body that sinks
+#: through the bed has no equilibrium (its lines' nodes resting on the bed
+#: penetrate millimetres, so a point carried by them stays well within this)
+SUNK_MARGIN = 1.0
+
+
+def seabed_height(env, x, y) -> Array:
+    """Height of the seabed [m] under (x, y): the bathymetry's where the scene has
+    one, else −depth."""
+    bathymetry = getattr(env.seabed, "bathymetry", None)
+    if bathymetry is None:
+        return -env.depth * jnp.ones_like(jnp.asarray(x, dtype=float))
+    return jax.vmap(bathymetry.height)(jnp.ravel(x), jnp.ravel(y)).reshape(jnp.shape(x))
+
+
+def sunk_bodies(scene, poses) -> Array:
+    """(n_bodies,) whether each body's reference point at ``poses`` is more than
+    :data:`SUNK_MARGIN` below the seabed under it."""
+    ref = jnp.stack([b.origin for b in scene.bodies]) + jnp.asarray(poses)[:, :3]
+    return ref[:, 2] < seabed_height(scene.env, ref[:, 0], ref[:, 1]) - SUNK_MARGIN
+
+
+def imbalance_report(scene, poses, residual, mooring) -> str:
+    """Words for an unconverged equilibrium (concrete arrays): the force and
+    moment left on each unbalanced body at its last pose, and where the
+    vertical balance is impossible (its own loads and its lines all push the
+    same way, or it sank through the seabed), why."""
+    poses, residual, mooring = (np.asarray(a, dtype=float) for a in (poses, residual, mooring))
+    sunk = np.asarray(sunk_bodies(scene, poses))
+    worst = np.max(np.abs(residual))
+    parts = []
+    for i, body in enumerate(scene.bodies):
+        g, m = residual[i], mooring[i]
+        if np.max(np.abs(g)) < 1e-3 * worst and not sunk[i]:
+            continue
+        own_z, lines_z = g[2] - m[2], m[2]
+        text = (f"body {body.label}: force ({g[0]:.4g}, {g[1]:.4g}, {g[2]:.4g}) N (vertically "
+                f"{own_z:.4g} N from its own loads, {lines_z:.4g} N from its lines) and moment "
+                f"({g[3]:.4g}, {g[4]:.4g}, {g[5]:.4g}) N·m left at η = "
+                f"({', '.join(f'{v:.4g}' for v in poses[i])})")
+        if sunk[i]:
+            ref = np.asarray(body.origin) + poses[i, :3]
+            floor = float(seabed_height(scene.env, ref[0], ref[1]))
+            text += (f"; it sank through the seabed (reference point at z = {ref[2]:.4g} m, the bed "
+                     f"at {floor:.4g} m: bodies have no seabed contact)")
+        tiny = 1e-9 * max(abs(own_z), abs(lines_z), 1.0)
+        if own_z < 0 and lines_z <= tiny:
+            text += (f"; nothing holds it up: its own loads (weight, buoyancy, hydrostatics, mean "
+                     f"loads) pull it down by {-own_z:.4g} N and its lines by {-lines_z:.4g} N")
+        elif own_z > 0 and lines_z >= -tiny:
+            text += (f"; nothing holds it down: its own loads push it up by {own_z:.4g} N and its "
+                     f"lines by {lines_z:.4g} N")
+        parts.append(text)
+    return "; ".join(parts)
+
+
 def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: float = 1e-6,
                          max_iterations: int = MAX_ITERATIONS, throw: bool = True,
                          method: str = "fem") -> SystemStatics:
@@ -174,7 +231,8 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         why = (f"the static solve of line(s) {', '.join(bad)} failed (can they reach their "
                "anchors?)" if bad else
                f"force imbalance {np.max(np.abs(np.asarray(out.residual))):.3g} N after "
-               f"{out.iterations} Newton iterations")
+               f"{out.iterations} Newton iterations: "
+               + imbalance_report(scene, out.poses, out.residual, out.mooring))
         raise RuntimeError(f"system statics did not converge: {why}")
     return out
 
@@ -277,6 +335,8 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
             break
         poses = trial
         inits = tuple(x.state() for x in new)
+        if bool(jnp.any(sunk_bodies(scene, poses))):  # no equilibrium: say so now
+            break
     st = line_statics_at(scene, poses, t, inits, methods)
     wrench = mooring_wrench(scene, poses, t, inits, methods)
     residual = body_forces(scene, poses, t, loads) + wrench
