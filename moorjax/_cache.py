@@ -300,8 +300,6 @@ class StoredProgram:
         ``false``/``off``/``no``)."""
         import concurrent.futures
 
-        import jax
-
         if not _switched_on("MOORJAX_COMPILE_AHEAD"):
             return False
         found = self._program(args, kwargs)

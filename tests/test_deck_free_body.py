@@ -367,3 +367,23 @@ def test_an_unbalanced_body_is_described_by_its_loads():
     assert f"pull it down by {-own[2]:.4g} N and its lines by 1e+04 N" in text
     up = np.array([[0.0, 0.0, 1.0e4, 0.0, 0.0, 0.0]])  # a buoyant body (own loads upward)
     assert "nothing holds it down" in imbalance_report(scene, held, up - own, up)
+
+
+@pytest.mark.slow
+def test_a_body_with_no_equilibrium_stops_early_and_says_why():
+    """``body_free.dat`` settles with a fairlead's line end pressed into the bed
+    and 395 kN left: the Newton iteration then crept 7e-7 m per iteration (each
+    trying 20 step halvings) for all 200 iterations, 4 minutes. Accepted steps
+    that move nothing and lower nothing now stop it (25 iterations here)."""
+    import re
+
+    from moorjax.statics.system import STALLS, solve_system_statics
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build_scene(read_deck(FREE))
+    with pytest.raises(RuntimeError, match="from its own loads") as err:
+        solve_system_statics(scene)
+    its = int(re.search(r"after (\d+) Newton iterations", str(err.value)).group(1))
+    assert STALLS < its < 40
+    assert "body B1: force (0, 0, -3.95" in str(err.value)

@@ -32,8 +32,8 @@ from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
 from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces,
-                              imbalance_report, line_statics_at, mooring_wrench, newton_step,
-                              sunk_bodies)
+                              STALLS, imbalance_report, line_statics_at, mooring_wrench,
+                              newton_step, stalled, sunk_bodies)
 
 
 class Equilibrium(eqx.Module):
@@ -209,7 +209,7 @@ def _body_newton(scene, t, loads, tol, max_iterations):
     inits0 = _states(line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
 
     def iteration(c):
-        (k, newton_its, trial, base, inits, size, jac, step, scale, _, _) = c
+        (k, newton_its, trial, base, inits, size, jac, step, scale, _, _, stalls) = c
         g, jac_t, states, ok, tens, sts = evaluate(trial, inits)
         finite = jnp.all(jnp.isfinite(g))  # (a non-finite J gets newton_step's regularised step)
         size_t = jnp.max(jnp.abs(g))
@@ -220,6 +220,8 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         # admissible_rise: as the host loop)
         scale = jnp.where(first, jnp.maximum(jnp.maximum(tens, size_t), 1.0), scale)
         accept = ok & finite & (first | (size_t <= size + admissible_rise(tol, scale, sts)))
+        stalls = jnp.where(accept, jnp.where(~first & stalled(trial - base, size, size_t),
+                                             stalls + 1, 0), stalls)
         base = jnp.where(accept, trial, base)
         inits = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), states, inits)
         size = jnp.where(accept, size_t, size)
@@ -228,16 +230,17 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         step = jnp.where(accept, newton_step(jac, jnp.where(finite, g, 0.0)), 0.5 * step)
         k = jnp.where(accept, 0, k + 1)
         # a body that sank through the seabed has no equilibrium (no body contact)
-        gave_up = (k >= HALVINGS) | (first & ~accept) | jnp.any(sunk_bodies(scene, base))
+        gave_up = ((k >= HALVINGS) | (first & ~accept) | jnp.any(sunk_bodies(scene, base))
+                   | (stalls >= STALLS))
         newton_its = newton_its + accept
         return (k, newton_its, base + step, base, inits, size, jac, step, scale,
-                converged | gave_up, converged)
+                converged | gave_up, converged, stalls)
 
     zero = jnp.zeros((nb, 6))
     c0 = (0, 0, poses0, poses0, inits0, jnp.inf, jnp.eye(n_dof), zero, 1.0,
-          jnp.asarray(False), jnp.asarray(False))
+          jnp.asarray(False), jnp.asarray(False), 0)
     c = lax.while_loop(lambda c: (c[1] <= max_iterations) & ~c[9], iteration, c0)
-    _, _, _, poses, inits, _, jac, _, _, _, converged = c
+    _, _, _, poses, inits, _, jac, _, _, _, converged, _ = c
     return poses, inits, converged, jac
 
 

@@ -127,6 +127,20 @@ def _newton_parts(scene, poses, t, loads, inits, methods):
 MAX_ITERATIONS = 200
 
 
+#: an accepted Newton step that moves no body by more than this [m, rad] and
+#: does not lower the largest imbalance is a stall; :data:`STALLS` in a row stop
+#: the bodies' statics (a body pressed into the bed by its own fairlead's line
+#: contact crept by 7e-7 m per iteration, each trying 20 halvings, for 200
+#: iterations: 4 minutes)
+STALL_STEP = 1e-6
+STALLS = 5
+
+
+def stalled(step, size_before, size_after) -> Array:
+    """Whether an accepted step (n_bodies, 6) is a stall (see :data:`STALL_STEP`)."""
+    return (jnp.max(jnp.abs(step)) <= STALL_STEP) & (size_after >= size_before)
+
+
 #: how far [m] below the seabed under it a body's reference point may go before
 #: the bodies' statics stop: bodies have no seabed contact, so a body that sinks
 #: through the bed has no equilibrium (its lines' nodes resting on the bed
@@ -298,6 +312,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
     converged = False
     it = 0
     inits = tuple(s.state() for s in line_statics_at(scene, poses, t, None, methods))
+    stalls = 0
     for it in range(1, max_iterations + 1):
         g, jac = _newton_parts(scene, poses, t, bool(loads), inits, methods)
         g_np = np.asarray(g)
@@ -315,6 +330,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
         # backtracking: seabed contact makes the imbalance kinked, so a full
         # Newton step can overshoot and cycle
         size = np.max(np.abs(g_np))
+        admissible = False
         for _ in range(HALVINGS):
             trial = poses + jnp.asarray(step)
             new = line_statics_at(scene, trial, t, inits, methods)
@@ -329,13 +345,15 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
                 w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(trial), ends))
                 g_trial = np.asarray(body_forces(scene, trial, t, loads) + w)
                 if np.max(np.abs(g_trial)) <= size + float(admissible_rise(tol, scale, new)):
+                    admissible = True
                     break
             step = 0.5 * step
-        if not ok:  # no trial step was admissible: stop at the last good poses
+        if not admissible:  # no trial step was admissible: stop at the last good poses
             break
+        stalls = stalls + 1 if bool(stalled(step, size, np.max(np.abs(g_trial)))) else 0
         poses = trial
         inits = tuple(x.state() for x in new)
-        if bool(jnp.any(sunk_bodies(scene, poses))):  # no equilibrium: say so now
+        if bool(jnp.any(sunk_bodies(scene, poses))) or stalls >= STALLS:  # no equilibrium reached
             break
     st = line_statics_at(scene, poses, t, inits, methods)
     wrench = mooring_wrench(scene, poses, t, inits, methods)
