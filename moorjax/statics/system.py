@@ -25,6 +25,7 @@ from jaxtyping import Array
 
 from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
+from ..body.point import ConnectionPoint
 from ..model.grouping import map_lines
 from .exact import catenary_eligible, catenary_solves
 from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, check_geometry, element_core
@@ -178,7 +179,9 @@ def imbalance_report(scene, poses, residual, mooring) -> str:
         if np.max(np.abs(g)) < 1e-3 * worst and not sunk[i]:
             continue
         own_z, lines_z = g[2] - m[2], m[2]
-        text = (f"body {body.label}: force ({g[0]:.4g}, {g[1]:.4g}, {g[2]:.4g}) N (vertically "
+        kind = "point" if isinstance(body, ConnectionPoint) else "body"
+        name = f"{kind} {body.label if body.label != kind else i + 1}"
+        text = (f"{name}: force ({g[0]:.4g}, {g[1]:.4g}, {g[2]:.4g}) N (vertically "
                 f"{own_z:.4g} N from its own loads, {lines_z:.4g} N from its lines) and moment "
                 f"({g[3]:.4g}, {g[4]:.4g}, {g[5]:.4g}) N·m left at η = "
                 f"({', '.join(f'{v:.4g}' for v in poses[i])})")
