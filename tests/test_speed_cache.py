@@ -388,3 +388,22 @@ def test_a_body_scene_is_built_and_checked_with_few_programs():
     assert sorted(built) == ["jit(_hydrostatic)", "jit(_rest_mass_matrix)"], built
     _, built = _programs_built(lambda: check_geometry(scene, 0.0))
     assert sorted(set(built)) == ["jit(_attached_at_rest)", "jit(_end_positions)"], built
+
+
+def test_settings_planned_while_tracing_keep_no_tracers():
+    """``plan`` shares the solver and controller of equal settings across calls;
+    one planned under the caller's ``jit`` (``simulate`` inside a traced
+    function) must not leave that trace's tracers in them for later calls."""
+    import jax
+
+    from moorjax.dynamics import settings
+
+    for cached in (settings._norm, settings._solver, settings._adaptive):
+        cached.cache_clear()
+    kw = dict(solver="ros34pw2", rtol=3e-4, atol=3e-3)
+    inside = jax.jit(lambda x: settings.plan(1.0, **kw).controller.rtol * x)(2.0)
+    later = settings.plan(1.0, **kw)
+    leaves = jax.tree_util.tree_leaves((later.solver, later.controller))
+    assert not any(isinstance(x, jax.core.Tracer) for x in leaves)
+    assert settings._adaptive.cache_info().hits == 1  # the traced plan's controller, shared
+    assert float(inside) == 2.0 * float(later.controller.rtol) == 6e-4

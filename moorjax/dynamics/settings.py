@@ -255,34 +255,39 @@ def plan(
 #
 # Building them (equinox modules, each tolerance an array on the device) took
 # about 0.5 ms, a twentieth of integrating 20 s of reference case B; they hold
-# no state, so a plan with the same settings shares them.
+# no state, so a plan with the same settings shares them. They are built with
+# ``jax.ensure_compile_time_eval``: a plan made while tracing (``simulate``
+# under the caller's ``jit``) would otherwise keep that trace's tracers.
 
 @functools.lru_cache(maxsize=64)
 def _norm(ratio: float) -> StateNorm:
-    return StateNorm(as_float(ratio))
+    with jax.ensure_compile_time_eval():
+        return StateNorm(as_float(ratio))
 
 
 @functools.lru_cache(maxsize=64)
 def _solver(name, newton_rtol, newton_atol, ratio, linear_solver, dense_newton):
     """:func:`make_solver` (the Newton tolerances given with fixed steps only)."""
-    return make_solver(
-        name,
-        newton_rtol=None if newton_rtol is None else as_float(newton_rtol),
-        newton_atol=None if newton_atol is None else as_float(newton_atol),
-        norm=_norm(ratio),
-        linear_solver=linear_solver,
-        dense_newton=dense_newton,
-    )
+    with jax.ensure_compile_time_eval():
+        return make_solver(
+            name,
+            newton_rtol=None if newton_rtol is None else as_float(newton_rtol),
+            newton_atol=None if newton_atol is None else as_float(newton_atol),
+            norm=_norm(ratio),
+            linear_solver=linear_solver,
+            dense_newton=dense_newton,
+        )
 
 
 @functools.lru_cache(maxsize=64)
 def _adaptive(rtol, atol, ratio, dtmin):
     """The adaptive step-size controller (coefficients 0.3/0.4, suited to stiff
     problems); dtmin [s]: a member whose state turns non-finite stops at once."""
-    return diffrax.PIDController(
-        rtol=as_float(rtol), atol=as_float(atol), norm=_norm(ratio), pcoeff=0.3, icoeff=0.4,
-        dtmin=jnp.asarray(dtmin), force_dtmin=False,
-    )
+    with jax.ensure_compile_time_eval():
+        return diffrax.PIDController(
+            rtol=as_float(rtol), atol=as_float(atol), norm=_norm(ratio), pcoeff=0.3,
+            icoeff=0.4, dtmin=jnp.asarray(dtmin), force_dtmin=False,
+        )
 
 
 def default_output_times(duration, dt_out):
