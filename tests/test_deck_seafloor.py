@@ -73,6 +73,21 @@ def test_flat_grid_equals_flat_seabed():
                                rtol=1e-12, atol=1e-9)
 
 
+def test_seabed_height_under_points():
+    """``Environment.seabed_height`` (where the bodies' statics look for a body
+    sunk through the bed): −depth on a flat bed or none, the grid's bilinear
+    height on a bathymetry, for any array shape."""
+    x, y = np.array([[-50.0, 0.0], [100.0, 300.0]]), np.array([[0.0, -10.0], [5.0, 10.0]])
+    for seabed in (None, Seabed(3e6, 3e5)):
+        np.testing.assert_array_equal(mj.Environment(50.0, seabed=seabed).seabed_height(x, y),
+                                      np.full((2, 2), -50.0))
+    grid = Bathymetry([0.0, 100.0], [-10.0, 10.0], [[-40.0, -40.0], [-60.0, -60.0]])  # a slope in x
+    z = mj.Environment(50.0, seabed=Seabed(3e6, 3e5, bathymetry=grid)).seabed_height(x, y)
+    np.testing.assert_allclose(z, [[-40.0, -40.0], [-60.0, -60.0]], rtol=1e-12)  # held at the edges
+    mid = mj.Environment(50.0, seabed=Seabed(3e6, 3e5, bathymetry=grid)).seabed_height(25.0, 3.0)
+    assert float(mid) == pytest.approx(-45.0, rel=1e-12)
+
+
 def test_tilted_plane_contact_is_normal_to_the_seabed():
     slope = 0.2  # z_b = -50 + 0.2 x
     grid = Bathymetry([0.0, 100.0], [-10.0, 10.0], [[-50.0, -50.0], [-30.0, -30.0]])

@@ -403,6 +403,16 @@ class Environment(eqx.Module):
         self.current = current
         self.waves = waves
 
+    def seabed_height(self, x, y) -> Array:
+        """Height of the seabed [m] under (x, y) (arrays of one shape): the
+        bathymetry's where the seabed has one, else −depth."""
+        bathymetry = None if self.seabed is None else self.seabed.bathymetry
+        if bathymetry is None:
+            return -self.depth * jnp.ones_like(jnp.asarray(x, dtype=float))
+        import jax
+
+        return jax.vmap(bathymetry.height)(jnp.ravel(x), jnp.ravel(y)).reshape(jnp.shape(x))
+
     def without_waves(self) -> "Environment":
         """The same water without waves: the mean state that statics solve for."""
         if self.waves is None:

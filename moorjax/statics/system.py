@@ -149,20 +149,11 @@ def stalled(step, size_before, size_after) -> Array:
 SUNK_MARGIN = 1.0
 
 
-def seabed_height(env, x, y) -> Array:
-    """Height of the seabed [m] under (x, y): the bathymetry's where the scene has
-    one, else −depth."""
-    bathymetry = getattr(env.seabed, "bathymetry", None)
-    if bathymetry is None:
-        return -env.depth * jnp.ones_like(jnp.asarray(x, dtype=float))
-    return jax.vmap(bathymetry.height)(jnp.ravel(x), jnp.ravel(y)).reshape(jnp.shape(x))
-
-
 def sunk_bodies(scene, poses) -> Array:
     """(n_bodies,) whether each body's reference point at ``poses`` is more than
     :data:`SUNK_MARGIN` below the seabed under it."""
     ref = jnp.stack([b.origin for b in scene.bodies]) + jnp.asarray(poses)[:, :3]
-    return ref[:, 2] < seabed_height(scene.env, ref[:, 0], ref[:, 1]) - SUNK_MARGIN
+    return ref[:, 2] < scene.env.seabed_height(ref[:, 0], ref[:, 1]) - SUNK_MARGIN
 
 
 def imbalance_report(scene, poses, residual, mooring) -> str:
@@ -187,7 +178,7 @@ def imbalance_report(scene, poses, residual, mooring) -> str:
                 f"({', '.join(f'{v:.4g}' for v in poses[i])})")
         if sunk[i]:
             ref = np.asarray(body.origin) + poses[i, :3]
-            floor = float(seabed_height(scene.env, ref[0], ref[1]))
+            floor = float(scene.env.seabed_height(ref[0], ref[1]))
             text += (f"; it sank through the seabed (reference point at z = {ref[2]:.4g} m, the bed "
                      f"at {floor:.4g} m: bodies have no seabed contact)")
         tiny = 1e-9 * max(abs(own_z), abs(lines_z), 1.0)
