@@ -15,11 +15,12 @@ compared at equal accuracy, and the worker's peak memory. ``first_call_ms_per_me
 is the first call's wall time (compile, statics and run, a fresh process with
 an empty compilation cache, as a user's first run) per member and ``first_call_vs_single_run``
 that over one single run's run time (compile excluded): issue 17's ensemble
-figure.
+figure. The workers split the CPU into one JAX device per core, as
+``moorjax ensemble`` does (``--cpu-devices N`` to choose; 1 for one core).
 
     python benchmarks/ensemble.py [--cases A B] [--sizes 1 10 100 1000]
                                   [--duration 10] [--quick] [--json PATH]
-                                  [--reference DIR]
+                                  [--reference DIR] [--cpu-devices N]
 """
 
 from __future__ import annotations
@@ -68,8 +69,11 @@ def _settings(case, solver=None, dt=None):
     return kw
 
 
-def worker(case, m, duration, solver=None, dt=None):
+def worker(case, m, duration, solver=None, dt=None, cpu_devices=None):
     """One (case, M) measurement; prints a JSON line."""
+    from moorjax.ensemble import use_cpu_cores
+
+    devices = use_cpu_cores(cpu_devices)  # as `moorjax ensemble` does, before any JAX work
     import jax
 
     from benchmarks.common import reference_csv
@@ -92,7 +96,7 @@ def worker(case, m, duration, solver=None, dt=None):
            if ref else None)
     st = status(res)
     out = dict(
-        case=case, members=m, compile_s=first - run, run_s=run, first_s=first,
+        case=case, members=m, cpu_devices=devices, compile_s=first - run, run_s=run, first_s=first,
         first_call_ms_per_member=first / m * 1e3,
         ms_per_sim_s_per_member=run / duration / m * 1e3,
         recompiled=TRACES != traces, failed=int(np.sum(st != "ok")),
@@ -150,10 +154,13 @@ def main(argv=None):
                          "../shared/reference beside the repository); workers inherit it")
     ap.add_argument("--solver", help="moorjax solver (default: the case's, see SETTINGS)")
     ap.add_argument("--dt", type=float, help="fixed step [s] (default: adaptive)")
+    ap.add_argument("--cpu-devices", type=int, default=None, metavar="N",
+                    help="CPU devices the ensemble shards over (default: one per core, as "
+                         "`moorjax ensemble`; 1 for one core)")
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "M"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
-        worker(a.worker[0], int(a.worker[1]), a.duration, a.solver, a.dt)
+        worker(a.worker[0], int(a.worker[1]), a.duration, a.solver, a.dt, a.cpu_devices)
         return 0
     if a.quick:
         a.sizes, a.duration = [1, 10, 100], 5.0
@@ -169,7 +176,8 @@ def main(argv=None):
                 p = subprocess.run([sys.executable, __file__, "--worker", case, str(m),
                                     "--duration", str(a.duration)]
                                    + (["--solver", a.solver] if a.solver else [])
-                                   + (["--dt", str(a.dt)] if a.dt else []),
+                                   + (["--dt", str(a.dt)] if a.dt else [])
+                                   + (["--cpu-devices", str(a.cpu_devices)] if a.cpu_devices else []),
                                    capture_output=True, text=True,
                                    env=dict(os.environ, MOORJAX_CACHE_DIR=cache))
             if p.returncode != 0:
@@ -183,7 +191,8 @@ def main(argv=None):
                      first_call_vs_single_run=r["first_call_ms_per_member"] / (single * a.duration),
                      vs_moordyn=r["ms_per_sim_s_per_member"] / md["stepping_ms"])
             rows.append(r)
-            print(f"  M={m:5d}: {r['ms_per_sim_s_per_member']:8.3f} ms/sim-s/member "
+            print(f"  M={m:5d} on {r['cpu_devices']} CPU device(s): "
+                  f"{r['ms_per_sim_s_per_member']:8.3f} ms/sim-s/member "
                   f"(x{r['vs_single']:.2f} of one-by-one, x{r['vs_moordyn']:.2f} of MoorDyn), "
                   f"compile {r['compile_s']:.1f} s, first call {r['first_call_ms_per_member']:.1f} ms "
                   f"per member (x{r['first_call_vs_single_run']:.2f} of one run), "

@@ -192,3 +192,98 @@ def test_cli_ensemble_summary_and_bad_vary(tmp_path, capsys):
                    "--vary", vary, "--out", str(tmp_path / "bad")])
         assert rc == 2
         assert msg in capsys.readouterr().err
+
+
+CORES = textwrap.dedent(
+    """
+    import json, os
+    import moorjax
+    from moorjax.ensemble import available_cores, use_cpu_cores
+    out = dict(cores=available_cores(), asked=use_cpu_cores(3))
+    try:
+        use_cpu_cores(0)
+    except ValueError as exc:
+        out["zero"] = str(exc)
+    import jax
+    out["devices"] = len(jax.devices("cpu"))
+    jax.numpy.ones(2).block_until_ready()  # JAX has computed: its devices are fixed now
+    out["after"] = use_cpu_cores(5)
+    out["devices_after"] = len(jax.devices("cpu"))
+    print(json.dumps(out))
+    """
+)
+
+
+def test_use_cpu_cores_before_and_after_jax_starts():
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    proc = subprocess.run([sys.executable, "-c", CORES], capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["cores"] >= 1
+    assert out["asked"] == 3 and out["devices"] == 3
+    assert "must be >= 1" in out["zero"]
+    assert out["after"] == 3 and out["devices_after"] == 3  # fixed once JAX has run
+    # a count the user set in XLA_FLAGS is kept when none is asked for
+    flags = dict(env, XLA_FLAGS="--xla_force_host_platform_device_count=2")
+    code = ("import moorjax, jax; from moorjax.ensemble import use_cpu_cores; "
+            "print(use_cpu_cores(), len(jax.devices('cpu')))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, env=flags)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["2", "2"]
+
+
+def test_cli_ensemble_shards_over_the_cpu_devices_it_asks_for(tmp_path):
+    """A fresh `moorjax ensemble` process splits the CPU as --cpu-devices says and
+    gives the one-device results."""
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    runs = {}
+    for n in (1, 3):
+        out = tmp_path / f"d{n}"
+        proc = subprocess.run(
+            [sys.executable, "-m", "moorjax", "ensemble", "example:taut_polyester", "--duration", "1",
+             "--segments", "6", "--vary", "Cd=1.2,1.6,2.0,2.4", "--out", str(out), "--solver", "heun",
+             "--dt", "2e-3", "--cpu-devices", str(n)],
+            capture_output=True, text=True, timeout=600, env=env)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert f"on {n} CPU device(s)" in proc.stderr
+        runs[n] = np.array([[float(v) for v in r.split(",")[4:]]
+                            for r in (out / "summary.csv").read_text().strip().splitlines()[1:]])
+    np.testing.assert_allclose(runs[3], runs[1], rtol=1e-10)
+
+
+STORED = textwrap.dedent(
+    """
+    import json, sys
+    from moorjax.ensemble import use_cpu_cores
+    use_cpu_cores(2)
+    import numpy as np
+    sys.path.insert(0, sys.argv[1])
+    import test_ensemble as t
+    from moorjax.ensemble import simulate_ensemble
+    from moorjax.ensemble.run import TRACES
+    res = simulate_ensemble(t.MEMBERS, t.DURATION, solver="heun", dt=2e-3, dt_out=0.1)
+    print(json.dumps(dict(traces=TRACES, devices=len(res.tension_b.sharding.device_set),
+                          tension=np.asarray(res.tension_b).ravel().tolist())))
+    """
+)
+
+
+def test_a_sharded_ensemble_is_stored_and_loaded_by_a_new_process(tmp_path):
+    """Members sharded over two CPU devices: the statics and the integration are
+    stored by structure, so a second process traces neither and gets the same."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    env.update(MOORJAX_CACHE_DIR=str(tmp_path), MOORJAX_COMPILATION_CACHE="1")
+    runs = []
+    for _ in range(2):
+        proc = subprocess.run([sys.executable, "-c", STORED, here], capture_output=True, text=True,
+                              timeout=900, env=env)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        runs.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    assert runs[0]["devices"] == runs[1]["devices"] == 2
+    assert runs[0]["traces"] == {"ensemble": 1, "statics": 1}
+    assert runs[1]["traces"] == {"ensemble": 0, "statics": 0}
+    assert runs[1]["tension"] == runs[0]["tension"]
+    assert len([p for p in os.listdir(tmp_path / "programs") if p.endswith(".hlo")]) == 2

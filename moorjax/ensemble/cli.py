@@ -28,6 +28,10 @@ def add_parser(subparsers):
                     help="output directory (resumed if it exists): summary.csv, ensemble.nc")
     en.add_argument("--histories", action="store_true", help="also write each member's tension history")
     en.add_argument("--chunk-size", type=positive_int, default=100, help="members per compiled batch")
+    en.add_argument("--cpu-devices", type=positive_int, default=None, metavar="N",
+                    help="on CPU, split the host into N JAX devices and shard each chunk's members over "
+                    "them (default: one per available core; 1 runs on one core; a count set in "
+                    "XLA_FLAGS is kept)")
     en.set_defaults(func=cmd_ensemble)
     return en
 
@@ -36,8 +40,11 @@ def cmd_ensemble(args) -> int:
     import os
 
     from .._progress import Progress, enabled
+    from .devices import use_cpu_cores
     from .store import SUMMARY_STATS, run_chunked
     from .vary import parse_vary, sweep
+
+    use_cpu_cores(args.cpu_devices)  # before JAX computes anything
 
     varies = [parse_vary(v) for v in args.vary]  # names checked before any work
     if os.path.exists(args.out) and not os.path.isdir(args.out):
@@ -50,8 +57,11 @@ def cmd_ensemble(args) -> int:
     members, table = sweep(scene, varies)
     prog = Progress("ensemble", enabled(args.quiet))
     n_chunks = -(-len(members) // min(args.chunk_size, len(members)))
-    prog.say(f"{len(members)} members in {n_chunks} chunk(s) of up to {args.chunk_size}; "
-             "compiling…")
+    import jax
+
+    where = f"{len(jax.local_devices())} {jax.default_backend().upper()} device(s)"
+    prog.say(f"{len(members)} members in {n_chunks} chunk(s) of up to {args.chunk_size}, on "
+             f"{where}; compiling…")
 
     def on_chunk(k, n):
         prog.bar((k + 1) / n, f"chunk {k + 1}/{n} done, {prog.elapsed():.0f} s")
@@ -99,7 +109,7 @@ def cmd_ensemble(args) -> int:
     write_netcdf(ds, os.path.join(args.out, "ensemble.nc"))
     n_bad = int(np.sum(data["status"] != "ok"))
     print(
-        f"{len(table)} members in {wall:.1f} s; {n_bad} failed; summary: "
+        f"{len(table)} members in {wall:.1f} s on {where}; {n_bad} failed; summary: "
         f"{os.path.join(args.out, 'summary.csv')}, {os.path.join(args.out, 'ensemble.nc')}",
         file=sys.stderr,
     )
