@@ -20,12 +20,16 @@ standard deviation, and the number of steps.
   element (``HERMITE_NS`` elements, kvaerno5/kvaerno3 at the middle tolerance pair),
   drawn in its own colour on the same work–precision plot.
 
-Then the cheapest run of each code (and of each method) at ≤ 1 %, 0.5 % and
-0.1 % error, with the time ratio. The references are good to about 0.3 % (see
-the reference README), so differences below that mean little and 0.1 % is out
-of reach.
+- with ``--precise``, only the fine tier that reaches 0.3 %: N = 60, 80, 100,
+  120 for both codes (MoorDyn rk2 and midpoint5 at their step limits and half
+  of them; moorjax ros34pw2, kvaerno3, and heun at MoorDyn's rk2 limit).
 
-    python benchmarks/vs_moordyn.py [--cases A B] [--duration 20] [--quick]
+Then the cheapest run of each code (and of each method) at ≤ 1 %, 0.5 %, 0.3 %
+and 0.1 % error, with the time ratio. The references are good to about 0.3 %
+(see the reference README), so differences below that mean little and 0.1 % is
+out of reach.
+
+    python benchmarks/vs_moordyn.py [--cases A B] [--duration 20] [--quick | --precise]
                                     [--json out.json] [--plot out.png]
                                     [--reference DIR] [--elements linear hermite]
 
@@ -67,8 +71,12 @@ ROS_TIGHT = (3e-6, 3e-5)
 ROS_LOOSE = (4e-4, 4e-3)
 #: error levels of the cheapest-run summary (0.5 %: only N = 80 runs get there; the
 #: references are good to about 0.3 %, so 0.1 % is not reachable with them)
-LEVELS = (0.01, 0.005, 0.001)
+LEVELS = (0.01, 0.005, 0.003, 0.001)
 NS = [10, 20, 40, 80]
+#: the fine tier (``--precise``): where the ≤ 0.3 % runs are (A needs N ≈ 100, B N ≈ 80)
+PRECISE_NS = [60, 80, 100, 120]
+#: MoorDyn's cheapest schemes at N = 80 in the cost table
+PRECISE_SCHEMES = ("rk2", "midpoint5")
 #: Hermite elements per line (each carries slopes and a tension field: ~2.5× the
 #: unknowns of a linear segment)
 HERMITE_NS = [5, 10, 20]
@@ -117,9 +125,47 @@ def rk2_limit(table, case, n):
     return max(dts) if dts else None
 
 
-def moorjax_plan(case, quick, table, elements=("linear",)):
+def scaled_limit(table, case, n, scheme):
+    """MoorDyn's largest stable dtM for ``scheme`` at N segments [s]: from the cost table
+    at N, else its N = 80 limit scaled as 1/N² (the internal damping's limit, README)."""
+    rows = [(m, dt) for (m, s, dt) in (table or {}).get(case, []) if s == scheme]
+    at_n = [dt for m, dt in rows if m == n]
+    if at_n:
+        return max(at_n)
+    base = max((m for m, _ in rows), default=None)
+    if base is None:
+        return None
+    return max(dt for m, dt in rows if m == base) * (base / n) ** 2
+
+
+def precise_moordyn(case, table):
+    """[(N, scheme, dtM)] of the fine tier: each scheme at its limit and half of it."""
+    runs = []
+    for n in PRECISE_NS:
+        for scheme in PRECISE_SCHEMES:
+            lim = scaled_limit(table or MOORDYN_FALLBACK, case, n, scheme)
+            if lim is not None:
+                runs += [(n, scheme, lim), (n, scheme, lim / 2)]
+    return runs
+
+
+def precise_plan(case, table):
+    """[(N, solver, (rtol, atol) or None, dt or None)] of the fine tier."""
+    runs = []
+    for n in PRECISE_NS:
+        runs += [(n, "ros34pw2", tol, None) for tol in (ROS_LOOSE, TOLS[0], TOLS[1])]
+        runs += [(n, "kvaerno3", TOLS[0], None)]
+        lim = scaled_limit(table or MOORDYN_FALLBACK, case, n, "rk2")
+        if lim is not None:
+            runs += [(n, "heun", None, lim)]
+    return runs
+
+
+def moorjax_plan(case, quick, table, elements=("linear",), precise=False):
     """[(N, solver, (rtol, atol) or None, dt or None, element)]."""
     runs = []
+    if precise:
+        return [r + ("linear",) for r in precise_plan(case, table)]
     if "linear" in elements:
         runs += [r + ("linear",) for r in _linear_plan(case, quick, table)]
     if "hermite" in elements:
@@ -143,12 +189,15 @@ def _linear_plan(case, quick, table):
     return runs
 
 
-def run_case(case, duration, quick, elements=("linear",)):
+def run_case(case, duration, quick, elements=("linear",), precise=False):
     c = CASES[case]
     ref_csv = reference_csv(case)
     table = moordyn_table()
-    md_runs = (QUICK["moordyn"][case] if quick else
-               [r for r in (table or MOORDYN_FALLBACK)[case] if r[0] <= 80])
+    if precise:
+        md_runs = precise_moordyn(case, table)
+    else:
+        md_runs = (QUICK["moordyn"][case] if quick else
+                   [r for r in (table or MOORDYN_FALLBACK)[case] if r[0] <= 80])
     rows = []
     for n, scheme, dt in md_runs:
         r = run_moordyn(example_path(c.deck), c.path(), duration, n_segments=n, dt=dt, scheme=scheme)
@@ -162,7 +211,7 @@ def run_case(case, duration, quick, elements=("linear",)):
         print(_line(rows[-1]), flush=True)
 
     inits = {}
-    for n, solver, tol, dt, element in moorjax_plan(case, quick, table, elements):
+    for n, solver, tol, dt, element in moorjax_plan(case, quick, table, elements, precise):
         scene = case_scene(case, n, element=element)
         if (n, element) not in inits:
             inits[n, element] = static_init(scene)
@@ -289,12 +338,21 @@ def main(argv=None):
     p.add_argument("--plot", metavar="PATH", help="write a work-precision plot (PNG)")
     p.add_argument("--elements", nargs="+", default=["linear"], choices=["linear", "hermite"],
                    help="moorjax elements to run (default: linear)")
+    p.add_argument("--precise", action="store_true",
+                   help="only the fine tier for the ≤ 0.3 %% level: N = 60, 80, 100, 120, MoorDyn rk2 and "
+                   "midpoint5 at their step limits (the table's, else its N = 80 limit scaled as 1/N²) and "
+                   "half of them, moorjax ros34pw2, kvaerno3 and heun at MoorDyn's rk2 limit (about 20 "
+                   "minutes); the references are good to about 0.3 %%, so this is the finest level they test")
     args = p.parse_args(argv)
-    print(f"work–precision, {args.duration:g} s simulated" + (" (--quick)" if args.quick else ""))
+    if args.precise and (args.quick or args.elements != ["linear"]):
+        p.error("--precise runs the linear element's fine tier; it does not combine with --quick "
+                "or --elements")
+    print(f"work–precision, {args.duration:g} s simulated" + (" (--quick)" if args.quick else "")
+          + (" (--precise)" if args.precise else ""))
     print(NOISE_NOTE)
     rows = []
     for case in args.cases:
-        rows += run_case(case, args.duration, args.quick, args.elements)
+        rows += run_case(case, args.duration, args.quick, args.elements, args.precise)
     for case in args.cases:
         print_table([r for r in rows if r["case"] == case], [
             ("code", _label, ""), ("N", "N", "d"), ("method", "method", ""),
@@ -306,7 +364,7 @@ def main(argv=None):
         ], title=f"case {case} (error: RMS end-B tension − reference |F|, over its std)")
     summary = summarise(rows, args.cases)
     write_json(args.json, dict(runs=jsonable(rows), summary=summary, duration_s=args.duration,
-                               quick=args.quick))
+                               quick=args.quick, precise=args.precise))
     if args.plot:
         plot(rows, args.cases, args.plot)
     return 0
