@@ -153,7 +153,7 @@ def precise_plan(case, table):
     """[(N, solver, (rtol, atol) or None, dt or None)] of the fine tier."""
     runs = []
     for n in PRECISE_NS:
-        runs += [(n, "ros34pw2", tol, None) for tol in (ROS_LOOSE, TOLS[0], TOLS[1])]
+        runs += [(n, "ros34pw2", tol, None) for tol in (ROS_LOOSE, TOLS[0], TOLS[1], ROS_TIGHT, TOLS[2])]
         runs += [(n, "kvaerno3", TOLS[0], None)]
         lim = scaled_limit(table or MOORDYN_FALLBACK, case, n, "rk2")
         if lim is not None:
