@@ -144,8 +144,10 @@ SHARDED = textwrap.dedent(
     a = simulate_ensemble(members, t.DURATION, devices="all", **fast)
     shards = len(a.tension_b.sharding.device_set) if hasattr(a.tension_b, "sharding") else 1
     b = simulate_ensemble(members, t.DURATION, devices=None, **fast)
+    c = simulate_ensemble(members, t.DURATION, devices="all", members_per_call=4, **fast)  # 2 calls
     print(json.dumps(dict(shape=list(a.tension_b.shape), devices=shards,
         diff=float(np.max(np.abs(np.asarray(a.tension_b) - np.asarray(b.tension_b)))),
+        diff_calls=float(np.max(np.abs(np.asarray(c.tension_b) - np.asarray(b.tension_b)))),
         scale=float(np.max(np.abs(np.asarray(b.tension_b)))))))
     """
 )
@@ -160,6 +162,7 @@ def test_sharded_over_four_cpu_devices_equals_unsharded():
     assert out["shape"] == [5, 21, 1]
     assert out["devices"] == 4
     assert out["diff"] <= 1e-10 * out["scale"]
+    assert out["diff_calls"] <= 1e-10 * out["scale"]
 
 
 def test_cli_ensemble_summary_and_bad_vary(tmp_path, capsys):
@@ -287,3 +290,21 @@ def test_a_sharded_ensemble_is_stored_and_loaded_by_a_new_process(tmp_path):
     assert runs[1]["traces"] == {"ensemble": 0, "statics": 0}
     assert runs[1]["tension"] == runs[0]["tension"]
     assert len([p for p in os.listdir(tmp_path / "programs") if p.endswith(".hlo")]) == 2
+
+
+def test_members_beyond_one_call_run_as_calls_of_one_program():
+    """Five members in calls of two (the last padded) equal one call of five, and
+    the calls share one compiled program."""
+    members = MEMBERS + [scene(1.4, 1.45e8, 0.8), scene(1.8, 1.55e8, 1.2)]
+    fast = dict(solver="heun", dt=2e-3, dt_out=0.1)
+    whole = simulate_ensemble(members, DURATION, **fast)
+    before = TRACES["ensemble"]
+    parts = simulate_ensemble(members, DURATION, members_per_call=2, **fast)
+    assert TRACES["ensemble"] - before <= 1
+    assert parts.tension_b.shape == whole.tension_b.shape == (5, 21, 1)
+    np.testing.assert_allclose(np.asarray(parts.tension_b), np.asarray(whole.tension_b),
+                               rtol=1e-12, atol=1e-9)
+    np.testing.assert_array_equal(status(parts), status(whole))
+    np.testing.assert_array_equal(np.asarray(parts.num_steps), np.asarray(whole.num_steps))
+    with pytest.raises(ValueError, match="members_per_call"):
+        simulate_ensemble(members, DURATION, members_per_call=0, **fast)
