@@ -55,13 +55,26 @@ def use_cpu_cores(n: int | None = None) -> int:
         jax.config.update("jax_num_cpu_devices", int(n))
     except RuntimeError:  # JAX has computed something: its devices are fixed
         return _current()
+    except AttributeError:  # a JAX older than the option: the XLA flag, read when JAX starts
+        return _flagged(int(n))
     return int(n)
+
+
+def _flagged(n: int) -> int:
+    from jax._src import xla_bridge
+
+    if xla_bridge.backends_are_initialized():
+        return _current()
+    flags = re.sub(rf"--{_FLAG}=\d+", "", os.environ.get("XLA_FLAGS", ""))
+    os.environ["XLA_FLAGS"] = f"{flags} --{_FLAG}={n}".strip()
+    return n
 
 
 def _chosen() -> int:
     """The CPU device count set before (config or XLA_FLAGS), else 0."""
-    if jax.config.jax_num_cpu_devices > 0:
-        return jax.config.jax_num_cpu_devices
+    chosen = getattr(jax.config, "jax_num_cpu_devices", -1)
+    if chosen > 0:
+        return chosen
     flag = re.search(rf"--{_FLAG}=(\d+)", os.environ.get("XLA_FLAGS", ""))
     return int(flag.group(1)) if flag else 0
 
