@@ -42,7 +42,8 @@ def use_cpu_cores(n: int | None = None) -> int:
         the number of CPU devices JAX will use: ``n``, unless JAX has already
         computed something (its devices are then fixed and their count is
         returned). Without ``n``, a count the user set before
-        (``jax_num_cpu_devices``, or ``XLA_FLAGS`` with ``--{flag}``) is kept.
+        (``jax_num_cpu_devices``, or ``XLA_FLAGS`` with
+        ``--xla_force_host_platform_device_count``) is kept.
     """
     if n is not None and int(n) < 1:
         raise ValueError(f"use_cpu_cores: n = {n} must be >= 1")
@@ -77,9 +78,6 @@ def _chosen() -> int:
         return chosen
     flag = re.search(rf"--{_FLAG}=(\d+)", os.environ.get("XLA_FLAGS", ""))
     return int(flag.group(1)) if flag else 0
-
-
-use_cpu_cores.__doc__ = use_cpu_cores.__doc__.replace("{flag}", _FLAG)
 
 
 def _current() -> int:

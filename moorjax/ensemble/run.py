@@ -210,13 +210,14 @@ def simulate_ensemble(
     def block(tree, k):
         return tree if calls == 1 else _batch.take(tree, np.arange(k * per_call, (k + 1) * per_call))
 
+    blocks = [placed(block(scenes, k)) for k in range(calls)]  # each placed once
     if init is None:
         # the statics compile and run while the integration compiles
         layout = jax.tree_util.tree_map(
             lambda x: jax.ShapeDtypeStruct((per_call,) + x.shape, x.dtype, sharding=spec),
             start_layout(_batch.member(scenes, 0)))
-        _batched_integrate.compile_ahead(placed(block(scenes, 0)), layout, p)
-        init, ok = equilibrium(placed(scenes), p.t0)
+        _batched_integrate.compile_ahead(blocks[0], layout, p)
+        init, ok = equilibrium(blocks[0] if calls == 1 else placed(scenes), p.t0)
         failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))
         failed = failed[failed < n]  # not the repeated last member's copies
         if failed.size:
@@ -233,8 +234,7 @@ def simulate_ensemble(
     y0 = _pad(pack(init), n_run)
     if calls > 1 and spec is not None:  # blocks are cut on one device, then sharded
         y0 = jax.device_put(y0, devices[0])
-    parts = [_batched_integrate(placed(block(scenes, k)), placed(block(y0, k)), p)
-             for k in range(calls)]
+    parts = [_batched_integrate(b, placed(block(y0, k)), p) for k, b in enumerate(blocks)]
     res = parts[0] if calls == 1 else jax.tree_util.tree_map(_joined, *parts)
     if n_run != n:
         res = jax.tree_util.tree_map(
