@@ -40,7 +40,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 
 #: resolution per case: the segment count at which moorjax's default solver
-#: (``auto``: ROS34PW2 at a tenth of the tolerances) is under 1 % error (see
+#: (``auto``: ROS34PW2) is under 1 % error (see
 #: vs_moordyn.py) and MoorDyn's cheapest run under 1 % (reference README)
 SETTINGS = {
     "A": dict(n=40, solver="auto", moordyn=(40, "rk2", 3.125e-3)),

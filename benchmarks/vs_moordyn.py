@@ -67,8 +67,10 @@ from moorjax.examples import example_path  # noqa: E402
 TOLS = [(1e-4, 1e-3), (1e-5, 1e-4), (1e-6, 1e-5)]
 #: a tighter pair for ros34pw2 (its cheapest runs are at the default and looser)
 ROS_TIGHT = (3e-6, 3e-5)
-#: and a looser one (case B, N = 10: 0.82 % at 4e-4/4e-3, 2.6 % at 1e-3/1e-2)
+#: and looser ones: with the segment chords measured (session 24) the error at a
+#: tolerance no longer grows with N, and loose tolerances are usable on fine meshes
 ROS_LOOSE = (4e-4, 4e-3)
+ROS_LOOSEST = (1e-3, 1e-2)
 #: error levels of the cheapest-run summary (0.5 %: only N = 80 runs get there; the
 #: references are good to about 0.3 %, so 0.1 % is not reachable with them)
 LEVELS = (0.01, 0.005, 0.003, 0.001)
@@ -180,7 +182,7 @@ def _linear_plan(case, quick, table):
         return QUICK["moorjax"][case]
     runs = [(n, s, tol, None) for n in NS for s in ("kvaerno3", "kvaerno5", "ros34pw2")
             for tol in TOLS]
-    runs += [(n, "ros34pw2", tol, None) for n in NS for tol in (ROS_TIGHT, ROS_LOOSE)]
+    runs += [(n, "ros34pw2", tol, None) for n in NS for tol in (ROS_TIGHT, ROS_LOOSE, ROS_LOOSEST)]
     runs += [(n, "implicit_euler", None, dt) for n in (20, 40) for dt in (1e-3, 2e-3, 5e-3)]
     for n in NS:
         lim = rk2_limit(table, case, n)

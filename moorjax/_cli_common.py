@@ -96,12 +96,16 @@ def dynamics_options(d):
                         "[m], both results (..., 3) [m/s, m/s^2]; without it such a deck's water is "
                         "still")
     d.add_argument("--solver", default="auto", choices=("auto",) + SOLVERS,
-                   help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) at a "
-                        "tenth of --rtol/--atol for decks of lines with the linear element, "
-                        "kvaerno5 with bodies, Hermite lines or bending stiffness")
+                   help="time stepper; auto: ros34pw2 (Rosenbrock-W, no Newton iteration) for "
+                        "decks of lines with the linear element, kvaerno5 with bodies, Hermite "
+                        "lines or bending stiffness")
     element_option(d)
     d.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance")
-    d.add_argument("--atol", type=float, default=1e-4, help="absolute tolerance of positions [m]")
+    d.add_argument("--atol", type=float, default=1e-4,
+                   help="absolute tolerance of positions [m]; adaptive steps also hold each "
+                        "segment chord of a line to its share of the position tolerance "
+                        "(atol + rtol*|r|)/segments, so that tension errors do not grow with "
+                        "the number of segments")
     d.add_argument(
         "--atol-velocity",
         type=float,

@@ -126,10 +126,10 @@ def test_netcdf_structure(example_run):
     assert ds.attrs["moorjax_version"] == moorjax.__version__
     assert "LINE TYPES" in ds.attrs["deck_text"]
     settings = json.loads(ds.attrs["settings"])
-    # the default, auto, is recorded as what ran: ROS34PW2 at a tenth of the tolerances
+    # the default, auto, is recorded as what ran: ROS34PW2 at the tolerances given
     assert settings["solver"] == "ros34pw2"
     np.testing.assert_allclose([settings["rtol"], settings["atol"], settings["atol_velocity"]],
-                               [1e-6, 1e-5, 1e-3], rtol=1e-12)
+                               [1e-5, 1e-4, 1e-2], rtol=1e-12)
     # the end nodes are the ends; the fairlead force is the point's force
     np.testing.assert_allclose(ds["node_position"].isel(node=-1).values, ds["position_b"].values)
     np.testing.assert_allclose(ds["point_force"].sel(point=2).values,

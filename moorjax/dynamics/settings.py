@@ -25,7 +25,8 @@ from jaxtyping import Array
 from .._numerics import as_float
 from .adjoint import ADJOINTS, banded_jacobian, check_adjoint
 from .meter import StepMeter
-from .solvers import LINEARLY_IMPLICIT, StateNorm, is_implicit, make_solver
+from .error_control import STRETCH_SHARE, StateNorm, StretchControl, stretch_segments
+from .solvers import LINEARLY_IMPLICIT, is_implicit, make_solver
 from .vector_field import has_stage_factors
 
 
@@ -77,41 +78,33 @@ Plan = Settings
 #: (bodies, Hermite or bending lines)
 AUTO_FALLBACK = "kvaerno5"
 
-#: ``solver="auto"`` runs ROS34PW2 at this fraction of the given tolerances.
-#: Its error estimate (an order-2 embedded solution) is less conservative than
-#: Kvaerno5's (order 4), so at equal nominal tolerances it is less accurate:
-#: at (1e-5, 1e-4) a stiff chain swinging into a current (tests/test_deck_currents.py)
-#: is 2.5 % off MoorDyn's fairlead tension at t = 1 s (Kvaerno5: 0.13 %), and the
-#: 45 s wave run of MoorDyn's wavekin_3.txt 0.29 of the tension's std (Kvaerno5:
-#: 0.05). At a tenth: 0.16 % and 0.038, and on the reference cases (20 s, error
-#: against the N = 160 references) A, N = 40: 0.79 % at 7.6 ms per simulated s
-#: (Kvaerno5 at the full tolerances: 0.84 % at 14.0), B, N = 10: 0.66 % at 3.6
-#: (Kvaerno5: 0.67 % at 3.9; in another run 4.8 against 3.1). See
-#: benchmarks/README.md, "Issue 17, session 10".
-AUTO_ROS_TOLERANCE = 0.1
-
-
 def resolve_tolerances(solver, rtol, atol, atol_velocity=None, scene=None):
     """``(solver, rtol, atol, atol_velocity)`` with ``"auto"`` resolved
-    (:func:`resolve_solver`) and, where it resolves to ROS34PW2, the tolerances
-    scaled by :data:`AUTO_ROS_TOLERANCE` (``atol_velocity`` defaulting to
-    100·atol first). Any other solver comes back with the tolerances as given:
-    the resolved settings, passed again, reproduce the run."""
+    (:func:`resolve_solver`) and ``atol_velocity`` defaulting to 100·atol: the
+    settings a run uses, which passed again reproduce it.
+
+    Until the step-size controller measured segment chords
+    (:class:`~moorjax.dynamics.error_control.StretchControl`), ``auto`` ran
+    ROS34PW2 at a tenth of the given tolerances, because at equal nominal
+    tolerances it was less accurate than Kvaerno5. With the chords measured it is
+    as accurate at the tolerances as given: on the reference cases (20 s, error
+    against the N = 160 references) A, N = 40: 0.792 % at 4.8 ms per simulated
+    s, against 0.792 % at 5.9 at the former tenth (Kvaerno5: 0.795 % at 10.9);
+    B, N = 10: 0.664 % at 1.4 against 0.663 % at 2.2; a stiff chain swinging
+    into a current (tests/data/current_steady) within 1.2e-3 of a converged run's
+    fairlead tension (the former tenth: 1.9e-3); MoorDyn's wavekin_3.txt, 45 s:
+    0.015 of the tension's std (0.022). See benchmarks/README.md, "Session 24".
+    """
     name = resolve_solver(solver, scene)
-    if name is solver or name != "ros34pw2":
-        return name, rtol, atol, atol_velocity
     if atol_velocity is None:
         atol_velocity = 100.0 * float(atol)
-    def scaled(tol):  # 1e-6, not 1.0000000000000002e-06, in the recorded settings
-        return float(f"{AUTO_ROS_TOLERANCE * float(tol):.12g}")
-
-    return name, scaled(rtol), scaled(atol), scaled(atol_velocity)
+    return name, rtol, atol, atol_velocity
 
 
 def resolve_solver(solver, scene=None):
     """The method name ``"auto"`` stands for: ``"ros34pw2"`` (the Rosenbrock-W
-    method; :func:`resolve_tolerances` runs it at a tenth of the tolerances,
-    where it is as accurate as Kvaerno5 and 1–2× cheaper on the reference cases)
+    method; as accurate as Kvaerno5 at equal tolerances and 1.5–2.5× cheaper on
+    the reference cases)
     when every line provides a structured Jacobian approximation (linear element,
     nodal mass, no bending) and there are no bodies, else ``"kvaerno5"``; other
     names and solver objects are returned as they are."""
@@ -151,12 +144,14 @@ def plan(
     adjoint: str = "checkpointed",
     checkpoints: int = 0,
     retry_failed_steps: bool = False,
+    stretch_share: float | None = None,
 ) -> Settings:
     """Check the settings of :func:`~moorjax.dynamics.simulate` (same arguments)
     and build the solver.
 
     ``solver="auto"`` (the default) resolves with :func:`resolve_tolerances`
-    (without ``scene``: Kvaerno5; ROS34PW2 runs at a tenth of the tolerances). Raises ``ValueError`` naming the offending setting. With ``scene``, a
+    (without ``scene``: Kvaerno5). Raises ``ValueError`` naming the offending
+    setting. With ``scene``, a
     structured linear solver is replaced by the dense one when some line's
     element does not have a block-tridiagonal Jacobian (consistent mass), and
     the run is checked against the time spans of the scene's motions.
@@ -169,11 +164,19 @@ def plan(
             solve fails with a quarter of it (steps grow back to ``dt``): a PID
             controller whose error control is off. Where no step fails the
             steps are exactly ``dt``.
+        stretch_share: adaptive steps: the multiplier of the segment-chord
+            tolerance (:class:`~moorjax.dynamics.error_control.StretchControl`;
+            default :data:`~moorjax.dynamics.error_control.STRETCH_SHARE`,
+            ``inf`` measures the state alone).
     """
     check_adjoint(adjoint)
+    if stretch_share is None:
+        stretch_share = STRETCH_SHARE
+    if not (float(stretch_share) > 0):
+        raise ValueError(f"stretch_share = {stretch_share} must be > 0 (inf: chords not measured)")
     if atol_velocity is None:
         atol_velocity = 100.0 * float(atol)
-    for name, tol, unit, hi in (  # the tolerances as given (auto may scale them below)
+    for name, tol, unit, hi in (
         ("rtol", rtol, "", 0.1),
         ("atol", atol, " m", 0.1),
         ("atol_velocity", atol_velocity, " m/s", 10.0),
@@ -238,7 +241,8 @@ def plan(
         # dtmin: a member whose state turns non-finite stops at once (with
         # RESULTS.dt_min_reached) instead of shrinking its step until max_steps.
         t_end = float(np.max(np.abs(np.asarray(ts)))) if not isinstance(ts, jax.core.Tracer) else 1.0
-        controller = _adaptive(float(rtol), float(atol), ratio, _DT_MIN * max(1.0, t_end))
+        controller = _adaptive(float(rtol), float(atol), ratio, _DT_MIN * max(1.0, t_end),
+                               stretch_segments(scene), float(stretch_share))
         if dt0 is not None and not (np.isfinite(dt0) and dt0 > 0):
             raise ValueError(f"dt0 = {dt0} s (the first adaptive step) must be > 0")
         step0 = dt0 if dt0 is not None else float(dt_out) / 10.0
@@ -280,13 +284,16 @@ def _solver(name, newton_rtol, newton_atol, ratio, linear_solver, dense_newton):
 
 
 @functools.lru_cache(maxsize=64)
-def _adaptive(rtol, atol, ratio, dtmin):
+def _adaptive(rtol, atol, ratio, dtmin, segments=(), share=STRETCH_SHARE):
     """The adaptive step-size controller (coefficients 0.3/0.4, suited to stiff
-    problems); dtmin [s]: a member whose state turns non-finite stops at once."""
+    problems); dtmin [s]: a member whose state turns non-finite stops at once;
+    segments, share: the segment chords it measures
+    (:class:`~moorjax.dynamics.error_control.StretchControl`)."""
     with jax.ensure_compile_time_eval():
-        return diffrax.PIDController(
+        return StretchControl(
             rtol=as_float(rtol), atol=as_float(atol), norm=_norm(ratio), pcoeff=0.3,
             icoeff=0.4, dtmin=jnp.asarray(dtmin), force_dtmin=False,
+            segments=segments, stretch_share=as_float(share),
         )
 
 

@@ -61,6 +61,7 @@ def simulate(
     throw: bool = True,
     count_newton: bool = False,
     retry_failed_steps: bool = False,
+    stretch_share: float | None = None,
 ) -> SimulationResult:
     """Integrate a scene in time.
 
@@ -82,14 +83,18 @@ def simulate(
             each line's own static shape, points and bodies where the scene puts
             them, not balanced; lines whose solve fails start straight, with a
             warning).
-        solver: ``"auto"`` (default): ROS34PW2, the Rosenbrock-W method, at a
-            tenth of ``rtol``, ``atol`` and ``atol_velocity`` for scenes of lines
-            with the linear element (no bodies, no bending), else Kvaerno5 (see
-            :func:`~moorjax.dynamics.settings.resolve_tolerances`); or a name from
+        solver: ``"auto"`` (default): ROS34PW2, the Rosenbrock-W method, for
+            scenes of lines with the linear element (no bodies, no bending),
+            else Kvaerno5 (see :func:`~moorjax.dynamics.settings.resolve_solver`);
+            or a name from
             :data:`moorjax.dynamics.SOLVERS`, or a diffrax solver.
         rtol: relative error-control tolerance (of node positions and velocities).
-        atol: absolute tolerance of node positions [m] (default 0.1 mm: a
-            tension error of about EA/l·atol).
+        atol: absolute tolerance of node positions [m] (default 0.1 mm).
+            Adaptive steps also hold each segment chord of a linear-element line
+            to ``stretch_share·(atol + rtol·|r|)/n_segments`` (the line's position
+            tolerance shared out over its segments), so that its tension error
+            does not grow with the number of segments
+            (:class:`~moorjax.dynamics.error_control.StretchControl`).
         atol_velocity: absolute tolerance of node velocities [m/s] (default
             100·atol per second). The same tolerances and norm stop the
             implicit methods' Newton iterations.
@@ -99,6 +104,10 @@ def simulate(
             with a quarter of it (steps grow back to ``dt``; no error control).
             Lets fixed steps pass seabed landings and snap loads: case A at
             N = 40 completes at dt = 10, 20 and 50 ms (0.79–0.81 % error).
+        stretch_share: multiplier of the segment-chord tolerance (default 1;
+            ``float("inf")``: positions and velocities alone, as before session 24:
+            at loose tolerances on fine meshes of stiff lines that let tension
+            errors of 20× the tension's std through).
         dt0: first step of the adaptive controller [s] (default: dt_out/10).
         max_steps: step limit.
         save_nodes: also return node positions and segment tensions.
@@ -130,6 +139,7 @@ def simulate(
         atol_velocity=atol_velocity, dt=dt, dt0=dt0, max_steps=max_steps,
         save_nodes=save_nodes, dense_newton=dense_newton, linear_solver=linear_solver,
         progress=progress, scene=scene, retry_failed_steps=retry_failed_steps,
+        stretch_share=stretch_share,
     )
     if init is None or isinstance(init, str):
         # the start is a static solve: compile the integration meanwhile (after

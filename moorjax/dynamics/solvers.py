@@ -18,18 +18,17 @@ for comparison.
 Error control measures positions [m] and velocities [m/s] on separate absolute
 scales (:class:`StateNorm`): tensions depend on positions to ~EA/l per metre,
 while velocity errors of a few mm/s are harmless; one common ``atol`` would make
-the controller chase tiny high-frequency axial velocity oscillations.
+the controller chase tiny high-frequency axial velocity oscillations. Adaptive
+steps also measure each segment chord of a linear-element line
+(:mod:`~moorjax.dynamics.error_control`).
 """
 
 from __future__ import annotations
 
 import diffrax
-import equinox as eqx
-import jax
-import jax.numpy as jnp
-from jaxtyping import Array
 
 from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
+from .error_control import StateNorm
 from .newton import StageChord, StageFactorSolver, VeryChord
 from .rosenbrock import RosenbrockW
 
@@ -64,39 +63,6 @@ LINEAR_SOLVERS = ("reduced", "block", "element", "dense")
 
 #: the implicit methods' default chord root finder
 NEWTON = StageChord
-
-
-class StateNorm(eqx.Module):
-    """RMS norm of a solver-state pytree with velocities weighted against positions.
-
-    Leaves are (n, 6) [r, v] arrays (or anything whose last axis is 6), or 1-D
-    body states (see :meth:`_body_weights`). The
-    velocity columns are multiplied by ``velocity_weight`` = atol / atol_velocity,
-    so that with the controller's ``atol`` in metres, a velocity error of
-    ``atol_velocity`` [m/s] counts as much as a position error of ``atol`` [m].
-    A NaN anywhere makes the norm +inf, so the step-size controller rejects the
-    step and shrinks it (diffrax would otherwise propagate a NaN step size and
-    spin until ``max_steps``). An array field: changing it does not recompile.
-    """
-
-    velocity_weight: Array
-
-    def _body_weights(self, n):
-        """A body's 1-D state [η (6) m/rad, η̇ (6), radiation states]: η̇ weighted
-        like node velocities, the rest like positions."""
-        return jnp.concatenate([jnp.ones(6), jnp.full(6, 1.0) * self.velocity_weight,
-                                jnp.ones(n - 12)])
-
-    def __call__(self, tree):
-        w = jnp.concatenate([jnp.ones(3), jnp.full(3, 1.0) * self.velocity_weight])
-        leaves = jax.tree_util.tree_leaves(tree)
-        if not leaves:
-            return jnp.asarray(0.0)
-        sq = sum(jnp.sum(jnp.abs(x * (w if x.ndim != 1 else self._body_weights(x.shape[0]))) ** 2)
-                 for x in leaves)
-        size = sum(x.size for x in leaves)
-        value = jnp.sqrt(sq / size)
-        return jnp.where(jnp.isnan(value), jnp.inf, value)
 
 
 def make_solver(

@@ -130,3 +130,15 @@ def take(batch, index):
     """Members ``index`` (an integer array) of a stacked batch, still stacked."""
     index = np.asarray(index)
     return jax.tree_util.tree_map(lambda x: x[index] if _is_array(x) else x, batch)
+
+
+def first(result, n: int, n_padded: int):
+    """The first ``n`` members of a padded batch of results: leaves whose leading
+    axis has the ``n_padded`` members are cut to ``n``, others (shared fields,
+    scalars) kept."""
+    if n == n_padded:
+        return result
+    return jax.tree_util.tree_map(
+        lambda x: x[:n] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == n_padded else x,
+        result,
+    )

@@ -236,12 +236,7 @@ def simulate_ensemble(
         y0 = jax.device_put(y0, devices[0])
     parts = [_batched_integrate(b, placed(block(y0, k)), p) for k, b in enumerate(blocks)]
     res = parts[0] if calls == 1 else jax.tree_util.tree_map(_joined, *parts)
-    if n_run != n:
-        res = jax.tree_util.tree_map(
-            lambda x: x[:n] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == n_run else x,
-            res,
-        )
-    return res
+    return _batch.first(res, n, n_run)
 
 
 def _joined(*parts):

@@ -122,11 +122,7 @@ def run_chunked(
         members = [scenes[i] for i in idx]
         members += [members[-1]] * (chunk_size - len(members))  # same compiled shape
         res = simulate_ensemble(members, duration, **settings)
-        m = len(idx)
-        res = jax.tree_util.tree_map(
-            lambda x: x[:m] if isinstance(x, jax.Array) and x.ndim and x.shape[0] == chunk_size else x,
-            res,
-        )
+        res = _batch.first(res, len(idx), chunk_size)
         arrays = {f"stat_{k2}": v for k2, v in summarise(res).items()}
         arrays.update(
             member=idx,
