@@ -266,24 +266,43 @@ def admissible_rise(tol, scale, lines) -> Array:
     return tol * scale + 2.0 * resid
 
 
+#: a Jacobian whose largest entry is below this fraction of the largest force
+#: imbalance (per metre or radian) counts as no stiffness at all (see newton_step)
+NEGLIGIBLE_STIFFNESS = 1e-3
+
+
 @jax.jit
 def newton_step(jac, g):
     """The damped Newton step (n_bodies, 6) on the poses from the imbalance g
     (n_bodies, 6) and its Jacobian J = ∂g/∂η: −J⁻¹g; where J is singular or
     undefined (a point on slack weightless lines has no stiffness, and such a
     line's shape, hence its implicit derivative, is undetermined: condition
-    number 1e12 or more, or a non-finite step) a regularised step (μI − J)Δη = g
-    with μ = |g|max per metre (translations) or per 0.05 rad (rotations), which
-    moves along the net force where J = 0 and becomes Newton's step as g
-    vanishes. Scaled to at most 5 m and 0.05 rad (the lines' statics must stay
-    reachable from their last shapes). One traced function for the host loop
-    here and the compiled one of :func:`moorjax.dynamics.initial.equilibrium_state`."""
+    number 1e12 or more, or a non-finite step), or negligible (its largest entry
+    below :data:`NEGLIGIBLE_STIFFNESS` of |g|max per metre: well conditioned
+    but nearly zero, as for a point resting exactly on the seabed at a slack
+    line), a regularised step (μI − J)Δη = g with μ = |g|max per 5 m
+    (translations) or per 0.05 rad (rotations), which moves along the net force
+    by up to those where J = 0 and becomes Newton's step as g vanishes. Scaled
+    to at most 5 m and 0.05 rad (the lines' statics must stay reachable from
+    their last shapes). One traced function for the host loop here and the
+    compiled one of :func:`moorjax.dynamics.initial.equilibrium_state`.
+
+    MoorDyn's ``seafloor.txt`` pendulum (a point on the seabed slope at a slack
+    line) under AMD EPYC rounding (session 24): with the condition test alone,
+    |J| < 5e-4 N/m (condition 1.5e7) gave a 5 m step upwards and the loop stopped
+    unconverged after 27 iterations; with the negligible-J test and μ per 1 m it
+    slid 1 m per iteration down the slope (41 iterations), per 5 m 16. Judging
+    the Newton step by its length instead (longer than 5 m: regularised) broke
+    the statics of free points and bodies far from equilibrium, whose long
+    Newton steps are right."""
     nb = g.shape[0]
     g = jnp.ravel(g)
     step = jnp.linalg.solve(jac, -g)
-    regular = jnp.all(jnp.isfinite(step)) & (jnp.linalg.cond(jac) < 1e12)
+    limits = jnp.tile(jnp.array([5.0] * 3 + [0.05] * 3), nb)
     scale = jnp.maximum(jnp.max(jnp.abs(g)), 1e-300)
-    mu = scale / jnp.tile(jnp.array([1.0] * 3 + [0.05] * 3), nb)
+    stiff = jnp.max(jnp.where(jnp.isfinite(jac), jnp.abs(jac), 0.0)) >= NEGLIGIBLE_STIFFNESS * scale
+    regular = jnp.all(jnp.isfinite(step)) & (jnp.linalg.cond(jac) < 1e12) & stiff
+    mu = scale / limits
     relaxed = jnp.linalg.solve(jnp.diag(mu) - jnp.where(jnp.isfinite(jac), jac, 0.0), g)
     step = jnp.where(regular, step, relaxed).reshape(nb, 6)
     big = jnp.maximum(jnp.maximum(jnp.max(jnp.abs(step[:, :3])) / 5.0,
