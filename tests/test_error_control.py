@@ -124,10 +124,13 @@ def test_loose_tolerances_on_drawn_lines_keep_the_tension():
     1e-7/1e-6. Measured against the tension that the position tolerance stands
     for, EA·(atol + rtol·h)/L (h the depth, L the line's length: the line's
     stretch off by its position tolerance), the RMS error of the fairlead tension
-    stays below 3 of it. Most of what is left is the outputs' interpolation
-    between steps, which the controller cannot see (module docstring of
-    moorjax.dynamics.error_control). The state-only control
-    (``stretch_share=inf``) breaks the bound on most draws."""
+    stays below 0.6 of it (measured: at most 0.21, median 0.022, with the
+    outputs between steps from the stages' dense output; with the cubic Hermite
+    interpolation through h·f(t₁, y₁) it was up to 2.0, median 0.16). The
+    state-only control (``stretch_share=inf``, about 0.4 of the steps) breaks
+    that bound on about half the draws (54 of 100, median 0.65, max 2.35; with
+    the Hermite interpolation median 60: most of its error then was the
+    interpolation)."""
     rng = np.random.default_rng(24)
     base = case_b_scene(n=60)
     ratios = {"chords": [], "state only": []}
@@ -150,5 +153,6 @@ def test_loose_tolerances_on_drawn_lines_keep_the_tension():
     r = {name: np.array(x) for name, x in ratios.items()}
     for name, x in r.items():
         print(f"{name}: error / (EA·tol/L) max {x.max():.3f}, median {np.median(x):.3f}")
-    assert np.all(r["chords"] < 3.0), np.argmax(r["chords"])
-    assert np.sum(r["state only"] > 3.0) > DRAWS // 2
+    assert np.all(r["chords"] < 0.6), np.argmax(r["chords"])
+    assert np.sum(r["state only"] > 0.6) > DRAWS // 3
+    assert np.median(r["state only"]) > 10 * np.median(r["chords"])

@@ -57,6 +57,50 @@ def test_order_on_a_forced_problem(lam, order, tol):
     assert errors[0] < tol
 
 
+def _dense_errors(lam, delta=0.0, thetas=(0.25, 0.5, 0.75), hermite=False):
+    """The largest error of the output inside one step of the forced problem from
+    y(t₀) = sin t₀ + δ (t₀ = 0.3; exact: sin t + δ·e^(−λ(t − t₀))), for each step in
+    H: the stages' dense output, or diffrax's cubic Hermite interpolation through
+    h·f at both ends."""
+    solver, term = RosenbrockW(structured=False), diffrax.ODETerm(_forced)
+    errors = []
+    for h in H:
+        t0 = 0.3
+        y0 = jnp.asarray([np.sin(t0) + delta])
+        state = solver.init(term, t0, t0 + h, y0, lam)
+        y1, _, dense, _, _ = solver.step(term, t0, t0 + h, y0, lam, state, False)
+        if hermite:
+            interp = diffrax.ThirdOrderHermitePolynomialInterpolation(
+                t0=t0, t1=t0 + h, y0=y0, y1=y1, k0=h * _forced(t0, y0, lam),
+                k1=h * _forced(t0 + h, y1, lam))
+        else:
+            interp = solver.interpolation_cls(t0=t0, t1=t0 + h, **dense)
+        exact = lambda t: np.sin(t) + delta * np.exp(-lam * (t - t0))  # noqa: E731
+        errors.append(max(abs(float(interp.evaluate(t0 + th * h)[0]) - exact(t0 + th * h))
+                          for th in thetas))
+    return np.asarray(errors)
+
+
+def test_dense_output_is_third_order_and_bounded_on_stiff_components():
+    """Between steps, the outputs are the stages' dense output of order 3
+    (moorjax/dynamics/rosenbrock.py, ``_dense_weights``): local error O(h⁴) on
+    the non-stiff problem, O(h³) on the stiff one (λ = 1e6). A step that starts
+    off the slow solution by δ = 1e-3 (as every step of a mooring line does, by
+    its tolerance, in the stiff axial modes) keeps the output within δ
+    (measured 7.2e-4), where the cubic Hermite interpolation through h·f(t₀, y₀)
+    is off by about 0.14·hλδ (1.8 to 14 here)."""
+    weights = np.asarray(ROS34PW2.dense)
+    np.testing.assert_allclose(weights.sum(axis=0), ROS34PW2.m, atol=1e-12)  # θ = 1: y₁
+    errors = _dense_errors(1.0)
+    assert np.all(_slopes(errors) > 3.6), errors
+    stiff = _dense_errors(1e6)
+    assert np.all(_slopes(stiff) > 2.7) and np.all(stiff < 2e-2 * np.asarray(H) ** 3), stiff
+    off, off_hermite = _dense_errors(1e6, 1e-3), _dense_errors(1e6, 1e-3, hermite=True)
+    print("errors", errors, "stiff", stiff, "off by 1e-3", off, "Hermite", off_hermite)
+    assert np.all(off < 1e-3), off
+    assert np.all(off_hermite > 1.0), off_hermite
+
+
 class _OffJacobian(RosenbrockW):
     """W = 0.3·J + 0.2 (a wrong matrix)."""
 

@@ -28,11 +28,14 @@ strain rate, which a segment's internal damping turns into tension) against
 ``(atol_velocity + rtol·|v|) / n_segments``: 1.4–1.6× the steps of reference
 case B at the default tolerances (N = 10, 20) for the same error.
 
-What the controller cannot see is the dense output between steps: the run's
-outputs at ``ts`` interpolate each step with a cubic Hermite polynomial, and
-where a line goes slack or snaps within a step the interpolated chords, and so
-the output tensions, can be off by more than the steps' own error (see
-``benchmarks/README.md``, "Session 24").
+What the controller cannot see is the dense output between steps. With the
+cubic Hermite interpolation through h·f(t₁, y₁) (diffrax's, which the Kvaerno
+solvers use), where a line goes slack or snaps within a step the interpolated
+chords, and so the output tensions, can be off by more than the steps' own
+error. ROS34PW2 interpolates with its stages instead
+(:class:`~moorjax.dynamics.rosenbrock.StagePolynomialInterpolation`), which cut
+the drawn lines' worst output error about tenfold (``benchmarks/README.md``,
+"Session 25").
 
 Newton's convergence tests (:mod:`moorjax.dynamics.newton`) keep measuring the
 plain state: the chord measure is an accuracy requirement on the accepted step,

@@ -45,10 +45,18 @@ steps raised the fairlead-tension error from 1.1 % to 5.6 %, since the contact
 stiffness of the nodes that touch down or lift off is stale in W (at a fixed
 40 ms step a kept W diverged). Measured costs are in ``benchmarks/README.md``.
 
-First same as last: f(tₙ₊₁, yₙ₊₁) is evaluated at the end of each step, serves
-the cubic Hermite dense output and is the next step's f(tₙ, yₙ); a step costs
+First same as last: f(tₙ₊₁, yₙ₊₁) is evaluated at the end of each step and is
+the next step's f(tₙ, yₙ); a step costs
 five vector-field evaluations (one for the time derivative), the band, one
 factorisation and five solves (one for the linearisation check).
+
+Outputs between steps are a dense output of order 3 built from the stages
+(:func:`_dense_weights`, :class:`StagePolynomialInterpolation`), not diffrax's
+cubic Hermite interpolation through h·f(t₁, y₁): on 100 drawn stiff lines
+that go slack and snap within a step (``tests/test_error_control.py``, N = 60,
+rtol/atol 4e-4/4e-3, 22,508 steps either way) the RMS fairlead tension error
+fell from median 0.0184 / max 3.72 of the tension's std to 0.0026 / 0.49; on
+reference cases A and B, whose errors are the mesh's, it is unchanged.
 
 W is not differentiated (``stop_gradient``): gradients are those of the
 W-method with its matrix held fixed, a consistent discretisation of the
@@ -85,6 +93,9 @@ class Tableau(eqx.Module):
     m: tuple = eqx.field(static=True)  # bΓ⁻¹
     m_err: tuple = eqx.field(static=True)  # (b − b̂)Γ⁻¹
     order: int = eqx.field(static=True)
+    #: the dense output: rows of θ¹, θ², θ³ coefficients on the stages u (y(t₀+θh)
+    #: = y₀ + Σₚ θᵖ Σⱼ dₚⱼ uⱼ), or ``()`` (then the cubic Hermite interpolation)
+    dense: tuple = eqx.field(static=True, default=())
 
     @classmethod
     def from_hairer_wanner(cls, gamma, a, g, b, b_hat, order):
@@ -97,6 +108,7 @@ class Tableau(eqx.Module):
         clean = lambda x: 0.0 if abs(x) < 1e-13 else float(x)  # noqa: E731
         rows = lambda m: tuple(tuple(clean(x) for x in r) for r in m)  # noqa: E731
         return cls(
+            dense=rows(_dense_weights(gamma, a, g, b) @ g_inv) if order == 3 and s == 4 else (),
             gamma=float(gamma),
             a_t=rows(a @ g_inv),
             c_t=rows(np.diag(np.full(s, 1.0 / gamma)) - g_inv),
@@ -106,6 +118,55 @@ class Tableau(eqx.Module):
             m_err=tuple(clean(x) for x in (np.asarray(b) - np.asarray(b_hat)) @ g_inv),
             order=int(order),
         )
+
+
+def _dense_weights(gamma, a, g, b):
+    """Weights bⱼ(θ) = Σₚ θᵖ Bₚⱼ (p = 1, 2, 3) of a dense output of order 3 for a
+    4-stage Rosenbrock method: the order conditions of Hairer & Wanner (Solving
+    ODEs II, Table IV.7.1) for the solution at t₀ + θh instead of t₀ + h,
+
+        Σ bⱼ(θ) = θ,   Σ bⱼ(θ) βⱼ = θ²/2 − γθ,   Σ bⱼ(θ) αⱼ² = θ³/3,
+        Σ bⱼ(θ) βⱼₖ βₖ = θ³/6 − γθ² + γ²θ,
+
+    with βⱼₖ = αⱼₖ + γⱼₖ (k < j), βⱼ = Σₖ βⱼₖ, αⱼ = Σₖ αⱼₖ (the θ-forms follow
+    from θ^ρ/t! for each tree, the diagonal γ moved to the right as in the
+    table). Four conditions fix the four weights; at θ = 1 they are the
+    method's own weights b (checked), so the output is continuous at both ends
+    of every step. Unlike the cubic Hermite interpolation through h·f(t₁, y₁)
+    it never multiplies a stiff component's error by hλ: the stages are the
+    solutions of (I − γhJ)-systems.
+    """
+    beta_jk = a + g
+    beta, alpha = beta_jk.sum(axis=1), a.sum(axis=1)
+    conditions = np.array([np.ones(4), beta, alpha ** 2, beta_jk @ beta])
+    powers = np.array([[1.0, 0.0, 0.0],  # right-hand sides as polynomials in θ
+                       [-gamma, 0.5, 0.0],
+                       [0.0, 0.0, 1.0 / 3.0],
+                       [gamma ** 2, -gamma, 1.0 / 6.0]])
+    weights = np.linalg.solve(conditions, powers).T  # rows: θ, θ², θ³
+    if not np.allclose(weights.sum(axis=0), b, atol=1e-12):
+        raise ValueError("dense output weights do not reproduce b at θ = 1")
+    return weights
+
+
+class StagePolynomialInterpolation(diffrax.AbstractLocalInterpolation):
+    """The dense output y₀ + θc₁ + θ²c₂ + θ³c₃ of a Rosenbrock step (θ the
+    fraction of the step; cₚ from the stages, :func:`_dense_weights`)."""
+
+    t0: Any
+    t1: Any
+    coeffs: Any  # per leaf, stacked [c₃, c₂, c₁, y₀]
+
+    def __init__(self, *, t0, t1, y0, c1, c2, c3):
+        self.t0, self.t1 = t0, t1
+        self.coeffs = jtu.tree_map(lambda *x: jnp.stack(x), c3, c2, c1, y0)
+
+    def evaluate(self, t0, t1=None, left=True):
+        del left
+        if t1 is not None:
+            return jtu.tree_map(lambda a, b: b - a, self.evaluate(t0), self.evaluate(t1))
+        theta = (t0 - self.t0) / jnp.where(self.t1 == self.t0, 1.0, self.t1 - self.t0)
+        return jtu.tree_map(lambda c: jnp.polyval(c, theta), self.coeffs)
 
 
 #: Rang & Angermann (2005), ROS34PW2
@@ -155,7 +216,7 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
     """
 
     term_structure: ClassVar = diffrax.AbstractTerm
-    interpolation_cls: ClassVar = diffrax.ThirdOrderHermitePolynomialInterpolation
+    interpolation_cls: ClassVar = StagePolynomialInterpolation
     tableau: Tableau = ROS34PW2
     jacobian_age: int = eqx.field(static=True, default=1)
     shrink: float = eqx.field(static=True, default=0.7)
@@ -181,6 +242,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
 
     # -- the Jacobian and the stage matrix ------------------------------------
     def __check_init__(self):
+        if not self.tableau.dense:
+            raise ValueError("RosenbrockW: the tableau has no dense output weights")
         if self.factors is not None and self.jacobian_age != 1:
             raise ValueError("RosenbrockW: factors are rebuilt every step (jacobian_age = 1)")
 
@@ -316,8 +379,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         f_end = terms.vf(t1, y1, args)
         if self.linearisation_check:
             y_error = self._with_linearisation_error(y_error, jac, lu, c, h, y0, y1, f0, f_t, f_end)
-        dense_info = dict(y0=y0, y1=y1, k0=jtu.tree_map(lambda a: h * a, f0),
-                          k1=jtu.tree_map(lambda a: h * a, f_end))
+        dense_info = dict(y0=y0, **{f"c{p + 1}": _combine(list(zip(row, u)))
+                                    for p, row in enumerate(tab.dense)})
         if self.factors is not None:
             jac = st.jac
         new_state = _State(f_end, jac, age + 1, jnp.asarray(h, dtype=float))
