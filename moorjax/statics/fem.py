@@ -27,12 +27,13 @@ import jax.lax as lax
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
+import optimistix as optx
 from jaxtyping import Array
 
 from .._cache import StoredProgram
 from .._numerics import as_float, safe_norm
 from ..linalg import block_tridiagonal as btd
-from ..linalg.banded_solver import band_of
+from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
 from ..linalg.undetermined import MinimumNorm
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
@@ -134,9 +135,6 @@ def _force_scale(line, env, t):
 
 _ALPHAS = 2.0 ** -np.arange(16.0)  # NumPy: no XLA op at import
 
-#: most Newton steps of the descent's polish after the force imbalance met its tolerance
-POLISH_STEPS = 4
-
 
 def _band_step(fn, y, fy, mu):
     """Solve (μI − J)·Δy = f with J's block-tridiagonal band (coloured JVPs, O(n))."""
@@ -153,8 +151,7 @@ def _dense_step(fn, y, fy, mu):
     return jnp.linalg.solve(mu * jnp.eye(m) - jac, fy.reshape(-1)).reshape(y.shape)
 
 
-def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
-             step_tol=None):
+def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None):
     """Regularised Newton with an exact line search on the static energy.
 
     Without a current the static forces are the negative gradient of a convex
@@ -175,22 +172,16 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
     pendulum: a weightless slack line of EA = 1e9 N, taut at 1e-10 strain below a
     kink, failed from its last shape at most trial poses and converged from the
     guess).
-
-    ``step_tol`` (a function of y, or None): once ``tol`` is met, go on until a
-    step moves no coordinate by more than ``step_tol(y)``, at most
-    ``POLISH_STEPS`` further steps (the polish: μ = max|f|/soft_length is then
-    negligible, so these are Newton steps). The iterate is judged by its force
-    imbalance alone, however the loop ended.
     """
     def cond(c):
-        _, _, it, done, _ = c
+        _, _, it, done = c
         return (it < max_steps) & jnp.invert(done)
 
     if restart is not None:
         f_restart = fn(restart, None)  # once, not per step (a cond on a vmapped count runs both sides)
 
     def body(c):
-        y, fy, it, _, polishing = c
+        y, fy, it, _ = c
         if restart is not None:
             now = it == max_steps // 2
             y, fy = jnp.where(now, restart, y), jnp.where(now, f_restart, fy)
@@ -210,26 +201,17 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
         # sign change of g between a_lo (g <= 0) and a_hi (g > 0)
         frac = jnp.where(jnp.isfinite(g_hi) & (g_hi > g_lo), -g_lo / (g_hi - g_lo), 0.0)
         alpha = jnp.where(k == 0, a_lo, a_lo + (a_hi - a_lo) * jnp.clip(frac, 0.0, 0.9))
-        # the polish takes full Newton steps: near the root g is rounding noise,
-        # and an interpolated α would make the convergence linear
-        alpha = jnp.where(polishing > 0, 1.0, alpha)
         y_new = y + alpha * dy
         f_new = fn(y_new, None)
         ok = jnp.all(jnp.isfinite(f_new))
         y_new = jnp.where(ok, y_new, y + a_lo * dy)
         f_new = jnp.where(ok, f_new, fn(y + a_lo * dy, None))
         done = jnp.max(jnp.abs(f_new)) <= tol(y_new)
-        if step_tol is not None:
-            # the polish: full Newton steps (μ is negligible once f is) until one
-            # is below step_tol, at most POLISH_STEPS of them after f first met tol
-            small = (polishing > 0) & (jnp.max(jnp.abs(y_new - y)) <= step_tol(y_new))
-            polishing = polishing + jnp.where(done | (polishing > 0), 1, 0)
-            done = done & (small | (polishing > POLISH_STEPS))
-        return y_new, f_new, it + 1, done, polishing
+        return y_new, f_new, it + 1, done
 
     f0 = fn(y0, None)
-    c0 = (y0, f0, jnp.array(0), jnp.max(jnp.abs(f0)) <= tol(y0), jnp.array(0))
-    y, _, it, _, _ = lax.while_loop(cond, body, c0)
+    c0 = (y0, f0, jnp.array(0), jnp.max(jnp.abs(f0)) <= tol(y0))
+    y, _, it, _ = lax.while_loop(cond, body, c0)
     return lax.stop_gradient(y), it
 
 
@@ -426,13 +408,9 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     #    equilibrium from the catenary guess with the true (tension-only) law: it
     #    cannot stall on the touchdown or slack kinks, and stops 100× below the
     #    force imbalance that counts as converged (never below what float64
-    #    resolves: positions carry eps·|r| of rounding). 2) The same loop goes on
-    #    as a polish until Newton's step is below atol + rtol·max|r| (at most
-    #    POLISH_STEPS more steps; the regularisation μ ∝ max|f| has vanished by
-    #    then, so these are Newton steps). A second solver for the polish
-    #    (optimistix's Newton until session 26) cost a fifth of the program's
-    #    compile time. The search runs on values only; the answer gets its
-    #    derivative from the implicit function theorem once, however it was
+    #    resolves: positions carry eps·|r| of rounding). 2) optimistix's Newton,
+    #    started there, polishes it. Both search on values only; the answer gets
+    #    its derivative from the implicit function theorem once, however it was
     #    found (``_implicit``: never the derivative of the iterations).
     fn = _residual(*_values((line, env, t)))
     k = line.line_type.axial.nominal_ea() / line.segment_length
@@ -447,10 +425,18 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     banded = line.banded_jacobian
     # from ``init``, the catenary guess once half the steps did not converge
     restart = None if init is None else lax.stop_gradient(initial_guess(line, env, t).r)
-    r_free, steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
-                             _band_step if banded else _dense_step, restart,
-                             step_tol=lambda y: atol + rtol * jnp.max(jnp.abs(y)))
-    r_free = _implicit(r_free, line, env, t)
+    r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
+                                     _band_step if banded else _dense_step, restart)
+    solver = (optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver()) if banded
+              else optx.Newton(rtol=rtol, atol=atol))
+    sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
+    # A polish that fails (NaN where the Jacobian is singular: slack line piled on
+    # the bed) or does worse leaves the descent's iterate; either is judged by its
+    # force imbalance alone.
+    res_start = jnp.max(jnp.abs(fn(r_start, None)))
+    res_polish = jnp.max(jnp.abs(fn(sol.value, None)))
+    polished = jnp.all(jnp.isfinite(sol.value)) & (res_polish <= jnp.maximum(res_start, tol(r_start)))
+    r_free = _implicit(jnp.where(polished, sol.value, r_start), line, env, t)
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element
@@ -470,7 +456,7 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
         tension_b=safe_norm(fb),
         grounded_length=_grounded_length(line, env, r),
         converged=converged,
-        iterations=steps,
+        iterations=damped_steps + sol.stats["num_steps"],
         max_residual=max_res,
     )
     return out
