@@ -8,6 +8,7 @@ import sys
 import textwrap
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -85,6 +86,38 @@ def test_structure_mismatch_names_the_field():
     fixed = eqx.tree_at(lambda s: s.lines[0].end_b, scene(), mj.FixedEnd([0, 0, -5.0]))
     with pytest.raises(StructureMismatchError, match="end_b: SinePath vs FixedEnd"):
         stack([scene(), fixed])
+
+
+def test_quick_structure_check_agrees_with_the_field_walk():
+    """stack and run_chunked compare members by tree definition and leaf shapes
+    first; over every pair of these variants (segments, a term present or not,
+    end types, a leaf's shape or dtype, values only) it must find a difference
+    exactly where the field-by-field walk does, and stacking on the host must
+    give jnp.stack's arrays."""
+    from moorjax.ensemble import batch
+
+    base = scene()
+    variants = [
+        base, scene(2.0, 1.6e8, 1.3), scene(n=8), scene(drag=False),
+        eqx.tree_at(lambda s: s.lines[0].end_b, base, mj.FixedEnd([0, 0, -5.0])),
+        eqx.tree_at(lambda s: s.lines[0].end_b, base, mj.FixedEnd([0, 0, -6.0])),
+        eqx.tree_at(lambda s: s.lines[0].line_type.diameter, base, jnp.asarray([0.1, 0.2])),
+        eqx.tree_at(lambda s: s.lines[0].line_type.diameter, base, jnp.asarray(1)),
+        (1.0, None, [2, jnp.zeros(3)]), (2, None, [2, jnp.ones(3)]), (1.0, 0.0, [2, jnp.zeros(3)]),
+        (1.0, None, [3, jnp.zeros(3)]), (1.0, None, [True, jnp.zeros(3)]),
+    ]
+    for i, a in enumerate(variants):
+        for j, b in enumerate(variants):
+            walk = batch._difference(a, b, "m")
+            assert batch._alike(a, b) == (walk is None), (i, j, walk)
+            assert batch.structure_difference(a, b, "m") == walk
+    members = [scene(1.2, 1.4e8, 0.5), scene(1.6, 1.5e8, 1.0)]
+    host = stack(members)
+    device = jax.tree_util.tree_map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), *members)
+    for x, y in zip(jax.tree_util.tree_leaves(host), jax.tree_util.tree_leaves(device)):
+        assert x.dtype == y.dtype and x.weak_type == y.weak_type and np.array_equal(x, y)
+    weak = stack([(1.0, np.float32(2.0)), (3.0, np.float32(4.0))])
+    assert weak[0].weak_type and weak[1].dtype == np.float32
 
 
 def test_chunked_run_matches_and_resumes(tmp_path, batch_result):

@@ -32,6 +32,45 @@ def _as_array(x):
     return x
 
 
+_FLOATING = {}
+
+
+def _floating(x) -> bool:
+    """Whether an array's dtype is a floating one (kept per dtype: checking an
+    ensemble's members asks it for every leaf of every member)."""
+    dt = np.result_type(x) if not hasattr(x, "dtype") else x.dtype
+    try:
+        return _FLOATING[dt]
+    except KeyError:
+        out = _FLOATING[dt] = bool(jnp.issubdtype(dt, jnp.floating))
+        return out
+
+
+def _alike(a, b) -> bool:
+    """True when two pytrees certainly share one structure: equal tree
+    definitions (node types, static fields, which optional terms exist) and
+    leaves that agree in shape and in being floating point, or are equal where
+    they are not arrays. False means "look closer" (:func:`structure_difference`
+    finds and names the difference). The members of an ensemble are compared
+    with the first one this way: 199 comparisons of case A scenes take 15 ms,
+    37 ms field by field (0.45 s before the dtype checks were kept per dtype)."""
+    try:
+        la, ta = jax.tree_util.tree_flatten(a)
+        lb, tb = jax.tree_util.tree_flatten(b)
+        if len(la) != len(lb) or not bool(ta == tb):
+            return False
+        for x, y in zip(la, lb):
+            x, y = _as_array(x), _as_array(y)
+            if _is_array(x) and _is_array(y):
+                if np.shape(x) != np.shape(y) or _floating(x) != _floating(y):
+                    return False
+            elif _is_array(x) or _is_array(y) or not bool(x == y):
+                return False
+        return True
+    except Exception:  # e.g. an array among the static fields: compare field by field
+        return False
+
+
 def structure_difference(a, b, path: str = "member") -> str | None:
     """The first structural difference between two pytrees, as text (``None`` if none).
 
@@ -39,6 +78,13 @@ def structure_difference(a, b, path: str = "member") -> str | None:
     (module types, static fields such as ``n_segments``, present/absent optional
     terms) must be equal.
     """
+    if _alike(a, b):
+        return None
+    return _difference(a, b, path)
+
+
+def _difference(a, b, path):
+    """:func:`structure_difference`, field by field."""
     a, b = _as_array(a), _as_array(b)
     if a is None or b is None:
         if (a is None) != (b is None):
@@ -49,9 +95,7 @@ def structure_difference(a, b, path: str = "member") -> str | None:
             return f"{path}: an array in one member, {type(b if _is_array(a) else a).__name__} in the other"
         if a.shape != b.shape:
             return f"{path}: shape {a.shape} vs {b.shape}"
-        if jnp.issubdtype(jnp.result_type(a), jnp.floating) != jnp.issubdtype(
-            jnp.result_type(b), jnp.floating
-        ):
+        if _floating(a) != _floating(b):
             return f"{path}: dtype {a.dtype} vs {b.dtype}"
         return None
     if type(a) is not type(b):
@@ -64,7 +108,7 @@ def structure_difference(a, b, path: str = "member") -> str | None:
                 if va != vb:
                     return f"{sub}: {va!r} vs {vb!r}"
             else:
-                d = structure_difference(va, vb, sub)
+                d = _difference(va, vb, sub)
                 if d:
                     return d
         return None
@@ -72,7 +116,7 @@ def structure_difference(a, b, path: str = "member") -> str | None:
         if len(a) != len(b):
             return f"{path}: {len(a)} vs {len(b)} items"
         for i, (x, y) in enumerate(zip(a, b)):
-            d = structure_difference(x, y, f"{path}[{i}]")
+            d = _difference(x, y, f"{path}[{i}]")
             if d:
                 return d
         return None
@@ -80,7 +124,7 @@ def structure_difference(a, b, path: str = "member") -> str | None:
         if set(a) != set(b):
             return f"{path}: keys {sorted(a)} vs {sorted(b)}"
         for k in a:
-            d = structure_difference(a[k], b[k], f"{path}[{k!r}]")
+            d = _difference(a[k], b[k], f"{path}[{k!r}]")
             if d:
                 return d
         return None
@@ -107,7 +151,20 @@ def stack(members: Sequence, name: str = "member"):
                 "differ only in array values (segment counts, force terms, end types "
                 "and array shapes must be the same)"
             )
-    return jax.tree_util.tree_map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), *members)
+    return jax.tree_util.tree_map(_stacked, *members)
+
+
+def _stacked(*xs):
+    """One leaf of every member, stacked. Concrete arrays of one dtype are
+    stacked on the host and placed once (100 members of case A: 30 ms instead of
+    0.29 s of eager device operations); anything else (Python numbers, weakly
+    typed or traced values, mixed dtypes) as ``jnp.stack`` would."""
+    if all(isinstance(x, np.ndarray) or (isinstance(x, jax.Array) and not x.weak_type
+                                         and not isinstance(x, jax.core.Tracer)) for x in xs):
+        dtypes = {x.dtype for x in xs}
+        if len(dtypes) == 1:
+            return jnp.asarray(np.stack([np.asarray(x) for x in xs]), dtype=dtypes.pop())
+    return jnp.stack([jnp.asarray(x) for x in xs])
 
 
 def size(batch) -> int:
