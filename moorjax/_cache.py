@@ -337,7 +337,9 @@ class StoredProgram:
         specs = _specs(leaves, self.sharded)
         lowered = call.lower(*specs)  # here: lowering traces, and tracing holds the lock
         pool = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="moorjax-compile")
-        self._ahead[key] = pool.submit(lowered.compile)
+        self._ahead[key] = future = pool.submit(lowered.compile)
+        _IN_FLIGHT.add(future)
+        future.add_done_callback(_IN_FLIGHT.discard)
         pool.shutdown(wait=False)
         return True
 
@@ -425,6 +427,15 @@ class StoredProgram:
 
 #: every StoredProgram, for :func:`clear_programs`
 _INSTANCES = weakref.WeakSet()
+
+#: compiles started by ``compile_ahead`` that have not finished (used or not)
+_IN_FLIGHT = set()
+
+
+def compiling() -> bool:
+    """Whether a compile started ahead is still running on its thread (its
+    executable goes to JAX's persistent cache when it ends)."""
+    return any(not f.done() for f in list(_IN_FLIGHT))
 
 
 def clear_programs():

@@ -444,3 +444,23 @@ def test_fit_callback_gets_the_gradient_norm_where_it_asks():
     assert _takes_grad_norm(lambda it, values, loss, grad_norm=None: None)
     assert _takes_grad_norm(lambda it, values, loss, **kw: None)
     assert not _takes_grad_norm(lambda it, values, loss: None)
+
+
+@pytest.mark.parametrize("fast_exit", ["1", "0"])
+def test_the_command_ends_with_its_code_and_its_output_delivered(tmp_path, fast_exit):
+    """``moorjax.cli.leave`` ends the process without Python's finalisation
+    (``os._exit``): what the command printed must still arrive through pipes
+    and its exit code must be kept; with
+    ``MOORJAX_FAST_EXIT=0`` it exits as before."""
+    import os
+
+    env = dict(os.environ, MOORJAX_FAST_EXIT=fast_exit)
+    bad = subprocess.run([sys.executable, "-m", "moorjax", "simulate", str(tmp_path / "absent.dat"),
+                          "--duration", "1", "--out", str(tmp_path / "x.csv")],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert bad.returncode == 2, bad
+    assert bad.stderr.strip().endswith("No such file or directory"), bad.stderr
+    ok = subprocess.run([sys.executable, "-m", "moorjax", "statics", DECK, "--segments", "6", "--json"],
+                        capture_output=True, text=True, env=env, timeout=300)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)  # complete, parseable output
