@@ -3,7 +3,8 @@
 Members are run ``chunk_size`` at a time (one compiled function: the last chunk
 is padded). After each chunk its results are written atomically to
 ``DIR/chunks/chunk_<k>.npz`` (temporary file, then rename), so memory stays
-bounded by one chunk and a crash loses at most the chunk in flight. Running the
+bounded by two chunks (the next one is dispatched before a chunk's results are
+read) and a crash loses at most the two in flight. Running the
 same ensemble again into the same directory skips the chunks already on disk;
 ``DIR/manifest.json`` records a fingerprint of the members and settings, and a
 directory holding a *different* ensemble is refused rather than mixed.
@@ -114,14 +115,9 @@ def run_chunked(
     else:
         with open(manifest_path, "w") as f:
             json.dump(manifest, f, indent=1)
-    for k in range(n_chunks):
-        path = _chunk_path(out_dir, k)
-        if os.path.exists(path):
-            continue  # resumed: this chunk is already on disk
-        idx = np.arange(k * chunk_size, min((k + 1) * chunk_size, n))
-        members = [scenes[i] for i in idx]
-        members += [members[-1]] * (chunk_size - len(members))  # same compiled shape
-        res = simulate_ensemble(members, duration, **settings)
+
+    def finish(k, idx, res):
+        """Chunk k's statistics and outcomes, written to its file."""
         res = _batch.first(res, len(idx), chunk_size)
         arrays = {f"stat_{k2}": v for k2, v in summarise(res).items()}
         arrays.update(
@@ -137,9 +133,27 @@ def run_chunked(
                 tension_a=np.asarray(res.tension_a),
                 tension_b=np.asarray(res.tension_b),
             )
-        _write_atomic(path, **arrays)
+        _write_atomic(_chunk_path(out_dir, k), **arrays)
         if on_chunk is not None:
             on_chunk(k, n_chunks)
+
+    # one chunk ahead: chunk k is prepared and dispatched (JAX runs it
+    # asynchronously) before chunk k-1's results are read and written, so the
+    # host's work between chunks overlaps the devices' (at most two chunks'
+    # results are held; a crash loses at most the two in flight)
+    pending = None
+    for k in range(n_chunks):
+        if os.path.exists(_chunk_path(out_dir, k)):
+            continue  # resumed: this chunk is already on disk
+        idx = np.arange(k * chunk_size, min((k + 1) * chunk_size, n))
+        members = [scenes[i] for i in idx]
+        members += [members[-1]] * (chunk_size - len(members))  # same compiled shape
+        res = simulate_ensemble(members, duration, **settings)
+        if pending is not None:
+            finish(*pending)
+        pending = (k, idx, res)
+    if pending is not None:
+        finish(*pending)
     return load(out_dir)
 
 
