@@ -4,7 +4,9 @@ entry point (exit codes, one-line warnings, Ctrl-C).
 
 Exit codes: 0 success, 2 bad input or usage, 3 the numerics failed (a static
 solve or time integration did not converge, a fit's loss became non-finite),
-4 out of memory or another resource (disk full), 130 interrupted (Ctrl-C).
+4 out of memory or another resource (disk full), 130 interrupted (Ctrl-C), 141
+the reader of the output went away (``moorjax statics deck | head``: no message,
+as a shell reports a process its pipe ended).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ._cli_load import (command_line, deck_text, load, load_for_dynamics, motion
                         resolved_settings)
 
 EXIT_OK, EXIT_INPUT, EXIT_NUMERICS, EXIT_RESOURCES, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
+EXIT_PIPE = 141  # 128 + SIGPIPE
 
 DESCRIPTION = ("moorjax: statics and time-domain simulation of mooring lines from MoorDyn v2 "
                "decks (differentiable, on JAX).")
@@ -339,11 +342,26 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"\nmoorjax {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # whoever read the output stopped reading: nothing to say
+        _silence_stdout()
+        return EXIT_PIPE
     except (ValueError, RuntimeError, OSError, MemoryError, ImportError) as exc:
         print(f"moorjax {args.command}: error: {_message(exc)}", file=sys.stderr)
         return _exit_code(exc)
     finally:
         warnings.formatwarning = saved
+
+
+def _silence_stdout() -> None:
+    """Point the standard output at the null device, so that flushing what is
+    still buffered for a closed pipe (at exit) neither fails nor complains."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file behind sys.stdout
+        pass
 
 
 def run() -> None:  # pragma: no cover - the console entry point

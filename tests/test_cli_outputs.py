@@ -464,3 +464,19 @@ def test_the_command_ends_with_its_code_and_its_output_delivered(tmp_path, fast_
                         capture_output=True, text=True, env=env, timeout=300)
     assert ok.returncode == 0, ok.stderr
     assert json.loads(ok.stdout)  # complete, parseable output
+
+
+@pytest.mark.parametrize("fast_exit", ["1", "0"])
+def test_a_reader_that_goes_away_ends_the_command_quietly(fast_exit):
+    """``moorjax statics deck --json | head -c 10``: the pipe closes before the
+    command writes; it ends with 141 (as a shell reports SIGPIPE) and says
+    nothing, neither an error line nor Python's complaint at exit."""
+    import os
+
+    env = dict(os.environ, MOORJAX_FAST_EXIT=fast_exit)
+    proc = subprocess.Popen([sys.executable, "-m", "moorjax", "statics", DECK, "--segments", "6", "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc.stdout.close()  # the reader is gone before anything is written
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == cli.EXIT_PIPE
+    assert err == ""
