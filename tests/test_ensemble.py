@@ -143,6 +143,21 @@ def test_chunked_run_matches_and_resumes(tmp_path, batch_result):
         run_chunked(MEMBERS[:2], out, DURATION, chunk_size=2, **SETTINGS)
 
 
+def test_a_chunk_that_fails_to_start_keeps_the_chunk_before_it(tmp_path):
+    """run_chunked dispatches chunk k before writing chunk k-1: when chunk k
+    is refused (a member's end below the seabed), chunk k-1, already run, must
+    still be written, so that a rerun resumes after it."""
+    from moorjax.model.parameters import set_parameter
+
+    out = str(tmp_path / "ens")
+    bad = set_parameter(scene(), "depth", 2.0)
+    with pytest.raises(ValueError, match="ensemble member 1: .*below the seabed"):
+        run_chunked(MEMBERS + [bad], out, DURATION, chunk_size=2, **SETTINGS)
+    assert os.path.exists(os.path.join(out, "chunks", "chunk_00000.npz"))
+    assert not os.path.exists(os.path.join(out, "chunks", "chunk_00001.npz"))
+    assert list(np.load(os.path.join(out, "chunks", "chunk_00000.npz"))["status"]) == ["ok"] * 2
+
+
 def test_lines_of_equal_structure_are_grouped():
     lt = case_b_line_type()
     env = mj.Environment(80.0, seabed=mj.Seabed(3e6, 3e5))

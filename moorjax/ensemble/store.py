@@ -148,7 +148,12 @@ def run_chunked(
         idx = np.arange(k * chunk_size, min((k + 1) * chunk_size, n))
         members = [scenes[i] for i in idx]
         members += [members[-1]] * (chunk_size - len(members))  # same compiled shape
-        res = simulate_ensemble(members, duration, **settings)
+        try:
+            res = simulate_ensemble(members, duration, **settings)
+        except Exception:  # e.g. a member's bad geometry: keep the chunk already run
+            if pending is not None:
+                finish(*pending)
+            raise
         if pending is not None:
             finish(*pending)
         pending = (k, idx, res)
