@@ -244,7 +244,7 @@ def stiff_band(line, env, t, q):
     m_inv = btd.inv3(0.5 * (mu[:-1] + mu[1:]))  # free nodes 1..n−1
 
     def rows(f_r, f_v):
-        return jnp.concatenate([m_inv @ f_r, m_inv @ f_v], axis=-1)  # (n−1, 3, 6)
+        return jnp.concatenate([btd.bmm(m_inv, f_r), btd.bmm(m_inv, f_v)], axis=-1)  # (n−1, 3, 6)
 
     n_free = q.shape[0]
     top = jnp.zeros((n_free, 3, 6))

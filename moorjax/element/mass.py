@@ -60,7 +60,7 @@ class NodalMass(AbstractMass):
         m_node = 0.5 * (mu[:-1] + mu[1:])  # interior nodes 1..n-1
         # closed-form 3×3 inverse (mass matrices are symmetric positive definite):
         # elementwise, so XLA fuses it, unlike a batched LAPACK solve
-        return jnp.einsum("nij,nj->ni", btd.inv3(m_node), force[1:-1])
+        return btd.bmv(btd.inv3(m_node), force[1:-1])
 
 
 class ConsistentMass(AbstractMass):

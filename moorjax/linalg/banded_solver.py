@@ -186,14 +186,14 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         if diag.shape[-1] != 6:
             raise ValueError(f"SecondOrderBandSolver needs 6 dofs per node (r, v); got {diag.shape[-1]}")
         p_inv = btd.inv3(diag[:, :3, :3])
-        gain = p_inv @ diag[:, :3, 3:]
+        gain = btd.bmm(p_inv, diag[:, :3, 3:])
         r_l, r_d, r_u = lower[:, 3:, :3], diag[:, 3:, :3], upper[:, 3:, :3]
         # neighbour gains: node i-1 for the lower block, node i+1 for the upper
         g_prev = jnp.concatenate([jnp.zeros_like(gain[:1]), gain[:-1]], axis=0)
         g_next = jnp.concatenate([gain[1:], jnp.zeros_like(gain[:1])], axis=0)
-        s_l = lower[:, 3:, 3:] - r_l @ g_prev
-        s_d = diag[:, 3:, 3:] - r_d @ gain
-        s_u = upper[:, 3:, 3:] - r_u @ g_next
+        s_l = lower[:, 3:, 3:] - btd.bmm(r_l, g_prev)
+        s_d = diag[:, 3:, 3:] - btd.bmm(r_d, gain)
+        s_u = upper[:, 3:, 3:] - btd.bmm(r_u, g_next)
         lu = btd.factor3(s_l, s_d, s_u)
         return _ReducedState(lower, diag, upper, p_inv, gain, (r_l, r_d, r_u), lu, treedef, sizes)
 
@@ -203,10 +203,10 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         if isinstance(state, _ReducedTransposed):
             return self._compute_transposed(state, vector)
         b = _flatten(vector, state.sizes)
-        u = jnp.einsum("nij,nj->ni", state.p_inv, b[:, :3])
+        u = btd.bmv(state.p_inv, b[:, :3])
         rhs = b[:, 3:] - btd.matvec(*state.coupling, u)
         vel = btd.solve(state.lu, rhs)
-        pos = u - jnp.einsum("nij,nj->ni", state.gain, vel)
+        pos = u - btd.bmv(state.gain, vel)
         x = jnp.concatenate([pos, vel], axis=-1)
         return _unflatten(x, state.treedef, state.sizes)
 
@@ -225,18 +225,18 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         r_l, r_d, r_u = state.coupling
         g_prev = jnp.concatenate([jnp.zeros_like(gain[:1]), gain[:-1]], axis=0)
         g_next = jnp.concatenate([gain[1:], jnp.zeros_like(gain[:1])], axis=0)
-        s_l = state.lower[:, 3:, 3:] - r_l @ g_prev
-        s_d = state.diag[:, 3:, 3:] - r_d @ gain
-        s_u = state.upper[:, 3:, 3:] - r_u @ g_next
+        s_l = state.lower[:, 3:, 3:] - btd.bmm(r_l, g_prev)
+        s_d = state.diag[:, 3:, 3:] - btd.bmm(r_d, gain)
+        s_u = state.upper[:, 3:, 3:] - btd.bmm(r_u, g_next)
         lu = btd.factor3(*_transpose_band(s_l, s_d, s_u))
         return _ReducedTransposed(_t(state.p_inv), _t(gain), _transpose_band(r_l, r_d, r_u), lu,
                                   state, state.treedef, state.sizes)
 
     def _compute_transposed(self, state, vector):
         b = _flatten(vector, state.sizes)
-        rhs = b[:, 3:] - jnp.einsum("nij,nj->ni", state.gain_t, b[:, :3])
+        rhs = b[:, 3:] - btd.bmv(state.gain_t, b[:, :3])
         vel = btd.solve(state.lu, rhs)
-        pos = jnp.einsum("nij,nj->ni", state.p_inv_t,
+        pos = btd.bmv(state.p_inv_t,
                          b[:, :3] - btd.matvec(*state.coupling_t, vel))
         x = jnp.concatenate([pos, vel], axis=-1)
         return _unflatten(x, state.treedef, state.sizes)
