@@ -236,8 +236,7 @@ class SecondOrderBandSolver(BlockTridiagonalSolver):
         b = _flatten(vector, state.sizes)
         rhs = b[:, 3:] - btd.bmv(state.gain_t, b[:, :3])
         vel = btd.solve(state.lu, rhs)
-        pos = btd.bmv(state.p_inv_t,
-                         b[:, :3] - btd.matvec(*state.coupling_t, vel))
+        pos = btd.bmv(state.p_inv_t, b[:, :3] - btd.matvec(*state.coupling_t, vel))
         x = jnp.concatenate([pos, vel], axis=-1)
         return _unflatten(x, state.treedef, state.sizes)
 
