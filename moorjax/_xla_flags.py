@@ -1,0 +1,64 @@
+"""XLA:CPU settings moorjax asks for before JAX starts its backend.
+
+A line's time step is a loop of a few hundred small operations (3×3 block
+products, band solves, Morison loads on ten to a hundred nodes); on a CPU, XLA
+runs each of them as its own task, and its default *concurrency-optimised*
+schedule orders them breadth first so that independent ones may run side by
+side. For kernels this small the side-by-side execution never pays: the
+runtime's bookkeeping costs more than the work. With the memory-minimising
+depth-first schedule instead (``--xla_cpu_enable_concurrency_optimized_scheduler=false``)
+the same programs, with the same step counts and the same numbers, run
+10–30 % faster per step (``benchmarks/README.md``, session 29).
+
+XLA reads ``XLA_FLAGS`` once, when JAX first computes something (not at
+``import jax``), so :func:`prefer_sequential_schedule` adds the flag at
+``import moorjax`` only while no backend has started; it changes nothing
+
+- when the user's ``XLA_FLAGS`` already set that flag (either value),
+- when JAX has already computed something (its flags are fixed by then),
+- with ``MOORJAX_XLA_TUNING=0`` (also ``false``/``off``/``no``) in the environment.
+
+The flag only affects XLA:CPU; GPU and TPU backends ignore it. It is part of
+JAX's persistent compilation-cache key, so executables compiled with and without
+it are kept apart.
+"""
+
+from __future__ import annotations
+
+import os
+
+#: the XLA:CPU flag and the value moorjax prefers
+FLAG = "xla_cpu_enable_concurrency_optimized_scheduler"
+VALUE = "false"
+
+_OFF = ("0", "false", "off", "no")
+
+
+def wanted() -> bool:
+    """Whether moorjax may add its XLA flags (``MOORJAX_XLA_TUNING``, default on)."""
+    return os.environ.get("MOORJAX_XLA_TUNING", "1").strip().lower() not in _OFF
+
+
+def _backend_started() -> bool:
+    try:
+        from jax._src import xla_bridge
+    except ImportError:  # pragma: no cover - a future JAX layout: assume started, touch nothing
+        return True
+    started = getattr(xla_bridge, "backends_are_initialized", None)
+    return True if started is None else bool(started())
+
+
+def prefer_sequential_schedule() -> bool:
+    """Add ``--xla_cpu_enable_concurrency_optimized_scheduler=false`` to
+    ``XLA_FLAGS`` where that is still possible and wanted (module docstring).
+
+    Returns:
+        True when the flag was added by this call.
+    """
+    if not wanted():
+        return False
+    flags = os.environ.get("XLA_FLAGS", "")
+    if f"--{FLAG}" in flags or _backend_started():
+        return False
+    os.environ["XLA_FLAGS"] = f"{flags} --{FLAG}={VALUE}".strip()
+    return True

@@ -1,0 +1,72 @@
+"""moorjax's XLA:CPU schedule flag (moorjax._xla_flags): added at import while
+JAX has not started, never over the user's choice, and it changes no result."""
+
+import json
+import os
+import subprocess
+import sys
+
+from moorjax import _xla_flags
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+FLAG = f"--{_xla_flags.FLAG}"
+
+
+def _env(**extra):
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "MOORJAX_XLA_TUNING")}
+    env.update(PYTHONPATH=ROOT, MOORJAX_COMPILATION_CACHE="0", **extra)
+    return env
+
+
+def _flags_after(code, **extra):
+    out = subprocess.run([sys.executable, "-c", code + "\nimport os; print(repr(os.environ.get('XLA_FLAGS')))"],
+                         env=_env(**extra), capture_output=True, text=True, check=True)
+    return eval(out.stdout.strip().splitlines()[-1])
+
+
+def test_import_adds_the_flag_and_keeps_the_users_flags():
+    assert _flags_after("import moorjax") == f"{FLAG}=false"
+    kept = "--xla_force_host_platform_device_count=2"
+    assert _flags_after("import moorjax", XLA_FLAGS=kept) == f"{kept} {FLAG}=false"
+
+
+def test_the_users_choice_and_the_switch_win():
+    assert _flags_after("import moorjax", XLA_FLAGS=f"{FLAG}=true") == f"{FLAG}=true"
+    for off in ("0", "false", "OFF", "no"):
+        assert _flags_after("import moorjax", MOORJAX_XLA_TUNING=off) is None
+
+
+def test_nothing_is_added_once_jax_has_computed():
+    # XLA has read its flags by then: adding one would only mislead
+    assert _flags_after("import jax.numpy as jnp; jnp.ones(2).block_until_ready(); import moorjax") is None
+
+
+def test_wanted_reads_the_switch(monkeypatch):
+    monkeypatch.delenv("MOORJAX_XLA_TUNING", raising=False)
+    assert _xla_flags.wanted()
+    monkeypatch.setenv("MOORJAX_XLA_TUNING", " Off ")
+    assert not _xla_flags.wanted()
+    assert not _xla_flags.prefer_sequential_schedule()
+
+
+_RUN = """
+import json, sys
+sys.path.insert(0, {tests!r})
+from test_speed_cache import _small_run
+from moorjax.dynamics import simulate
+scene, y0, p = _small_run()
+res = simulate(scene, 1.0)
+print(json.dumps(dict(steps=int(res.num_steps), tension=[float(x) for x in res.tension_b[:, 0]])))
+"""
+
+
+def test_the_schedule_changes_no_number():
+    """An implicit run of a moving catenary with and without the flag: the same
+    steps and the same tensions to the last bit (the flag orders XLA's work, it
+    does not change it)."""
+    code = _RUN.format(tests=os.path.join(ROOT, "tests"))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=_env(MOORJAX_XLA_TUNING=v),
+                                      capture_output=True, text=True, check=True)
+                       .stdout.strip().splitlines()[-1]) for v in ("1", "0")]
+    assert runs[0]["steps"] == runs[1]["steps"] > 0
+    assert runs[0]["tension"] == runs[1]["tension"]
