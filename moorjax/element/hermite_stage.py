@@ -89,9 +89,9 @@ class HermiteStageFactor(eqx.Module):
             d_v = btd.solve(self.lu, rhs * _free(n))
         else:
             held, band = self.held
-            d_p = jnp.einsum("kij,kj->ki", held, r_v)
+            d_p = btd.bmv(held, r_v)
             rhs = rhs - btd.matvec(*band, d_p)
-            d_v = btd.solve(self.lu, rhs - jnp.einsum("kij,kj->ki", held, rhs)) + d_p
+            d_v = btd.solve(self.lu, rhs - btd.bmv(held, rhs)) + d_p
         d_u = r_u + self.c * d_v
         return jnp.concatenate([_packed(d_u, n), _packed(d_v, n)], axis=-1)
 
@@ -117,9 +117,9 @@ def stage_factor(line, env, t, q, c) -> HermiteStageFactor:
     band = tuple(m - c * cc - c * c * k for m, cc, k in zip(m_band, c_band, k_band))
     if clamped_slopes(line, t):
         keep = _projector(line, t)  # P's node blocks (n+1, 6, 6)
-        lower = keep @ band[0] @ jnp.roll(keep, 1, axis=0)  # row k, column k − 1
-        diag = keep @ band[1] @ keep + (jnp.eye(6) - keep)
-        upper = keep @ band[2] @ jnp.roll(keep, -1, axis=0)
+        lower = btd.bmm(btd.bmm(keep, band[0]), jnp.roll(keep, 1, axis=0))  # row k, column k − 1
+        diag = btd.bmm(btd.bmm(keep, band[1]), keep) + (jnp.eye(6) - keep)
+        upper = btd.bmm(btd.bmm(keep, band[2]), jnp.roll(keep, -1, axis=0))
         held = (jnp.eye(6) - keep, band)
     else:  # P is diagonal (0 on the ends' positions): rows and columns masked
         free_np = _free(n)
