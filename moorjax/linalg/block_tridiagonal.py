@@ -59,8 +59,8 @@ def factor(lower: Array, diag: Array, upper: Array) -> BlockTridiagonalLU:
 
     def step(prev_inv, xs):
         a_i, d_i, c_prev = xs
-        m_i = bmm(a_i, prev_inv)
-        piv_inv = jnp.linalg.inv(d_i - bmm(m_i, c_prev))
+        m_i = a_i @ prev_inv
+        piv_inv = jnp.linalg.inv(d_i - m_i @ c_prev)
         return piv_inv, (piv_inv, m_i)
 
     _, (pinv, mult) = jax.lax.scan(step, d0_inv, (lower[1:], diag[1:], upper[:-1]))
