@@ -27,16 +27,16 @@ from __future__ import annotations
 
 import os
 
+from ._cache import _switched_on
+
 #: the XLA:CPU flag and the value moorjax prefers
 FLAG = "xla_cpu_enable_concurrency_optimized_scheduler"
 VALUE = "false"
 
-_OFF = ("0", "false", "off", "no")
-
 
 def wanted() -> bool:
     """Whether moorjax may add its XLA flags (``MOORJAX_XLA_TUNING``, default on)."""
-    return os.environ.get("MOORJAX_XLA_TUNING", "1").strip().lower() not in _OFF
+    return _switched_on("MOORJAX_XLA_TUNING")
 
 
 def _backend_started() -> bool:

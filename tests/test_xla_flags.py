@@ -19,9 +19,10 @@ def _env(**extra):
 
 
 def _flags_after(code, **extra):
-    out = subprocess.run([sys.executable, "-c", code + "\nimport os; print(repr(os.environ.get('XLA_FLAGS')))"],
-                         env=_env(**extra), capture_output=True, text=True, check=True)
-    return eval(out.stdout.strip().splitlines()[-1])
+    show = "\nimport json, os; print(json.dumps(os.environ.get('XLA_FLAGS')))"
+    out = subprocess.run([sys.executable, "-c", code + show], env=_env(**extra), capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def test_import_adds_the_flag_and_keeps_the_users_flags():
