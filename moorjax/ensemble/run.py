@@ -107,9 +107,17 @@ def _check_members(scenes, t0):
 
 
 def _shard(tree, spec):
-    return jax.tree_util.tree_map(
-        lambda x: jax.device_put(x, spec) if isinstance(x, jax.Array) else x, tree
-    )
+    """``tree``'s arrays placed with ``spec``. An array on one device is split on
+    the host: ``device_put`` would slice it on its device by a small compiled
+    program per leaf shape (each traced and read from the cache in a new process)."""
+    def put(x):
+        if not isinstance(x, jax.Array):
+            return x
+        if len(x.sharding.device_set) == 1 and not x.weak_type:
+            return jax.device_put(np.asarray(x), spec)
+        return jax.device_put(x, spec)
+
+    return jax.tree_util.tree_map(put, tree)
 
 
 def _pad(tree, n_total):
@@ -183,9 +191,12 @@ def simulate_ensemble(
         raise ValueError(f"members_per_call = {members_per_call} must be >= 1")
     if isinstance(scenes, (list, tuple)):
         _check_members(scenes, settings.get("t0", 0.0))
+        first = scenes[0]
         scenes = _batch.stack(scenes, name="scene")
+    else:
+        first = _batch.member(scenes, 0)
     n = _batch.size(scenes)
-    p = plan(duration, scene=_batch.member(scenes, 0), **settings)
+    p = plan(duration, scene=first, **settings)
     if devices == "all":
         devices = jax.local_devices()
     # no more devices than members: a device's share synchronises with the others'
@@ -215,7 +226,7 @@ def simulate_ensemble(
         # the statics compile and run while the integration compiles
         layout = jax.tree_util.tree_map(
             lambda x: jax.ShapeDtypeStruct((per_call,) + x.shape, x.dtype, sharding=spec),
-            start_layout(_batch.member(scenes, 0)))
+            start_layout(first))
         _batched_integrate.compile_ahead(blocks[0], layout, p)
         init, ok = equilibrium(blocks[0] if calls == 1 else placed(scenes), p.t0)
         failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))
