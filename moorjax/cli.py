@@ -366,12 +366,43 @@ def _silence_stdout() -> None:
 
 def run() -> None:  # pragma: no cover - the console entry point
     """``moorjax`` and ``python -m moorjax``: :func:`main`, exiting with its code."""
+    _fewer_collections()
     try:
         code = main()
     except KeyboardInterrupt:  # while parsing or importing
         print("\nmoorjax: interrupted", file=sys.stderr)
         code = EXIT_INTERRUPTED
     leave(code)
+
+
+#: objects allocated between two young-generation collections in a command
+#: (Python's default is 700)
+GC_YOUNG = 50_000
+
+
+def _fewer_collections() -> None:
+    """Python's garbage collector, tuned for one command's process.
+
+    Tracing and loading JAX programs allocates millions of short-lived objects;
+    at Python's default threshold every 700 allocations start a collection, and
+    the older generations' collections walk everything imported (JAX, NumPy,
+    moorjax). Measured with perf on a new process loading a stored simulation:
+    7 % of its samples in ``gc_collect_main``. So the objects alive now (the
+    imported modules) are moved out of the collector's sight (``gc.freeze``) and
+    the young generation is collected every :data:`GC_YOUNG` allocations. Peak
+    memory was unchanged (0.68 GB, 200-member ``moorjax ensemble``). The
+    command line only: ``import moorjax`` leaves a user's process alone;
+    ``MOORJAX_GC_TUNING=0`` (also ``false``/``off``/``no``) turns it off.
+    """
+    import gc
+
+    from ._cache import _switched_on
+
+    if not _switched_on("MOORJAX_GC_TUNING"):
+        return
+    gc.freeze()
+    young, *older = gc.get_threshold()
+    gc.set_threshold(max(young, GC_YOUNG), *older)
 
 
 def leave(code: int) -> None:  # pragma: no cover - ends the process

@@ -480,3 +480,24 @@ def test_a_reader_that_goes_away_ends_the_command_quietly(fast_exit):
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=300) == cli.EXIT_PIPE
     assert err == ""
+
+
+@pytest.mark.parametrize("switch", ["1", "0"])
+def test_the_command_collects_garbage_less_often(switch):
+    """``moorjax.cli.run`` freezes what is imported and raises the young
+    generation's threshold (``_fewer_collections``); ``MOORJAX_GC_TUNING=0``
+    leaves Python's defaults. In a new process: it changes the process's state."""
+    import os
+
+    code = ("import gc; from moorjax import cli; before = gc.get_threshold()[0]; "
+            "cli._fewer_collections(); "
+            "print(before, gc.get_threshold()[0], gc.get_freeze_count() > 0)")
+    env = dict(os.environ, MOORJAX_GC_TUNING=switch)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    before, after, frozen = out.stdout.split()
+    if switch == "1":
+        assert int(after) == max(int(before), cli.GC_YOUNG) and frozen == "True"
+    else:
+        assert after == before and frozen == "False"
