@@ -26,6 +26,7 @@ it are kept apart.
 from __future__ import annotations
 
 import os
+import re
 
 from ._cache import _switched_on
 
@@ -48,6 +49,32 @@ def _backend_started() -> bool:
     return True if started is None else bool(started())
 
 
+def set_flag(name: str, value, *, keep_user: bool) -> bool:
+    """Put ``--name=value`` into ``XLA_FLAGS`` while no JAX backend has started
+    (XLA reads the variable when the first one starts); the user's other flags
+    are kept.
+
+    Args:
+        name: the XLA flag, without the dashes.
+        value: its value (written with ``str``).
+        keep_user: where ``XLA_FLAGS`` already sets the flag, keep that value
+            (True) or replace it (False).
+
+    Returns:
+        True when ``XLA_FLAGS`` was changed by this call.
+    """
+    if _backend_started():
+        return False
+    flags = os.environ.get("XLA_FLAGS", "")
+    given = re.compile(rf"--{re.escape(name)}(=\S*)?(?=\s|$)")
+    if given.search(flags):
+        if keep_user:
+            return False
+        flags = given.sub("", flags)
+    os.environ["XLA_FLAGS"] = f"{flags.strip()} --{name}={value}".strip()
+    return True
+
+
 def prefer_sequential_schedule() -> bool:
     """Add ``--xla_cpu_enable_concurrency_optimized_scheduler=false`` to
     ``XLA_FLAGS`` where that is still possible and wanted (module docstring).
@@ -55,10 +82,4 @@ def prefer_sequential_schedule() -> bool:
     Returns:
         True when the flag was added by this call.
     """
-    if not wanted():
-        return False
-    flags = os.environ.get("XLA_FLAGS", "")
-    if f"--{FLAG}" in flags or _backend_started():
-        return False
-    os.environ["XLA_FLAGS"] = f"{flags} --{FLAG}={VALUE}".strip()
-    return True
+    return wanted() and set_flag(FLAG, VALUE, keep_user=True)

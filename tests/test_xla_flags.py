@@ -71,3 +71,17 @@ def test_the_schedule_changes_no_number():
                        .stdout.strip().splitlines()[-1]) for v in ("1", "0")]
     assert runs[0]["steps"] == runs[1]["steps"] > 0
     assert runs[0]["tension"] == runs[1]["tension"]
+
+
+def test_set_flag_keeps_or_replaces_a_value_and_the_other_flags():
+    """``set_flag`` (also behind ``use_cpu_cores`` on a JAX without
+    ``jax_num_cpu_devices``): keep_user=False replaces the user's value of that
+    flag only (not a flag whose name it begins), keep_user=True leaves it."""
+    count = "xla_force_host_platform_device_count"
+    given = f"--{count}=3 --{count}_x=7 --a=1"
+    code = ("import os; from moorjax import _xla_flags as X; "
+            f"os.environ['XLA_FLAGS'] = {given!r}; "
+            f"assert X.set_flag({count!r}, 2, keep_user=False); "
+            f"assert not X.set_flag({count!r}, 5, keep_user=True); "
+            "assert X.set_flag('b', 'x', keep_user=True)")
+    assert _flags_after(code, MOORJAX_XLA_TUNING="0") == f"--{count}_x=7 --a=1 --{count}=2 --b=x"

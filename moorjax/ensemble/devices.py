@@ -62,13 +62,9 @@ def use_cpu_cores(n: int | None = None) -> int:
 
 
 def _flagged(n: int) -> int:
-    from jax._src import xla_bridge
+    from .._xla_flags import set_flag
 
-    if xla_bridge.backends_are_initialized():
-        return _current()
-    flags = re.sub(rf"--{_FLAG}=\d+", "", os.environ.get("XLA_FLAGS", ""))
-    os.environ["XLA_FLAGS"] = f"{flags} --{_FLAG}={n}".strip()
-    return n
+    return n if set_flag(_FLAG, n, keep_user=False) else _current()
 
 
 def _chosen() -> int:
