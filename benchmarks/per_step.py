@@ -22,23 +22,21 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-import jax  # noqa: E402
-
 from benchmarks.common import (  # noqa: E402
     NOISE_NOTE,
+    _call,
     base_parser,
     case_scene,
     jsonable,
     print_table,
     rel_error,
+    short_error,
     static_init,
     write_json,
 )
-from moorjax.dynamics import simulate  # noqa: E402
 
 #: segments per case (each case's cheapest N at about 1 % error)
 SEGMENTS = {"A": 40, "B": 10}
@@ -48,14 +46,16 @@ SOLVERS = {"auto": (1e-5, 1e-4), "ros34pw2": (1e-4, 1e-3), "kvaerno3": (1e-5, 1e
 
 
 def best_run(scene, duration, repeats, **kwargs):
-    """(best wall time of ``repeats`` calls [s], first call's time [s], last result)."""
-    times, res = [], None
+    """(best wall time of ``repeats`` calls [s], first call's time [s], last
+    result or None, error message): each call is :func:`common._call`, so a run
+    that stops with moorjax's RuntimeError is reported, not raised."""
+    times, res, err = [], None, ""
     for _ in range(repeats):
-        t = time.perf_counter()
-        res = simulate(scene, duration, **kwargs)
-        jax.block_until_ready(res.tension_b)
-        times.append(time.perf_counter() - t)
-    return min(times[1:] or times), times[0], res
+        res, err, wall, _ = _call(scene, duration, kwargs)
+        if res is None:
+            return None, None, None, err
+        times.append(wall)
+    return min(times[1:]), times[0], res, err
 
 
 def main(argv=None):
@@ -82,13 +82,20 @@ def main(argv=None):
         init = static_init(scene)
         for solver in args.solvers:
             rtol, atol = SOLVERS[solver]
-            run_s, first_s, res = best_run(scene, args.duration, args.repeats, init=init,
-                                           solver=solver, rtol=rtol, atol=atol)
-            steps = int(res.num_steps)
-            rejected = int(res.num_rejected_steps)
+            run_s, first_s, res, message = best_run(scene, args.duration, args.repeats,
+                                                    init=init, solver=solver, rtol=rtol, atol=atol)
+            row = dict(case=case, N=n, solver=solver, rtol=rtol, atol=atol,
+                       outcome="ok" if res is not None else "error: " + short_error(message),
+                       message=message, steps=None, rejected=None, run_s=run_s,
+                       compile_s=None, us_per_step=None, ms_per_sim_s=None, rel_err=None)
+            if res is None:
+                rows.append(row)
+                print(f"  {case} N={n:<3d} {solver:9s} {rtol:g}/{atol:g}: {row['outcome']}",
+                      flush=True)
+                continue
+            steps, rejected = int(res.num_steps), int(res.num_rejected_steps)
             err = rel_error(dict(result=res, outcome="ok"), case)
-            row = dict(case=case, N=n, solver=solver, rtol=rtol, atol=atol, steps=steps,
-                       rejected=rejected, run_s=run_s, compile_s=max(first_s - run_s, 0.0),
+            row.update(steps=steps, rejected=rejected, compile_s=max(first_s - run_s, 0.0),
                        us_per_step=1e6 * run_s / max(steps, 1),
                        ms_per_sim_s=1e3 * run_s / args.duration, rel_err=err)
             rows.append(row)
@@ -99,6 +106,7 @@ def main(argv=None):
     print_table(rows, [
         ("case", "case", ""), ("N", "N", "d"), ("solver", "solver", ""),
         ("rtol/atol", lambda r: f"{r['rtol']:g}/{r['atol']:g}", ""),
+        ("outcome", lambda r: r["outcome"][:40], ""),
         ("steps", "steps", "d"), ("rejected", "rejected", "d"),
         ("µs/step", "us_per_step", ".1f"), ("ms/sim-s", "ms_per_sim_s", ".2f"),
         ("compile [s]", "compile_s", ".1f"),
