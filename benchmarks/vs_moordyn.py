@@ -191,7 +191,7 @@ def _linear_plan(case, quick, table):
     return runs
 
 
-def run_case(case, duration, quick, elements=("linear",), precise=False):
+def run_case(case, duration, quick, elements=("linear",), precise=False, repeats=3):
     c = CASES[case]
     ref_csv = reference_csv(case)
     table = moordyn_table()
@@ -202,7 +202,8 @@ def run_case(case, duration, quick, elements=("linear",), precise=False):
                    [r for r in (table or MOORDYN_FALLBACK)[case] if r[0] <= 80])
     rows = []
     for n, scheme, dt in md_runs:
-        r = run_moordyn(example_path(c.deck), c.path(), duration, n_segments=n, dt=dt, scheme=scheme)
+        r = run_moordyn(example_path(c.deck), c.path(), duration, n_segments=n, dt=dt, scheme=scheme,
+                        repeats=repeats)
         ok = r["status"] == "ok"
         err = rel_rms_error(r["t"], r["tension"], ref_csv) if (ref_csv and ok) else None
         rows.append(dict(case=case, code="MoorDyn", N=n, method=scheme, element="lumped mass", setting=f"dtM {1e3 * dt:.4g} ms",
@@ -224,7 +225,7 @@ def run_case(case, duration, quick, elements=("linear",), precise=False):
         if dt is not None:
             kw["dt"] = dt
             setting = f"dt {1e3 * dt:.4g} ms"
-        r = timed_run(scene, duration, **kw)
+        r = timed_run(scene, duration, repeats=repeats, **kw)
         res = r.pop("result")
         err = (rel_rms_error(np.asarray(res.ts), np.asarray(res.tension_b[:, 0]), ref_csv)
                if (ref_csv and r["outcome"] == "ok") else None)
@@ -345,7 +346,12 @@ def main(argv=None):
                    "midpoint5 at their step limits (the table's, else its N = 80 limit scaled as 1/N²) and "
                    "half of them, moorjax ros34pw2, kvaerno3 and heun at MoorDyn's rk2 limit (about 20 "
                    "minutes); the references are good to about 0.3 %%, so this is the finest level they test")
+    p.add_argument("--repeats", type=int, default=3,
+                   help="timed runs per configuration and code; the least time is kept (default 3: "
+                   "MoorDyn's whole run repeated, moorjax's call after its compiling first)")
     args = p.parse_args(argv)
+    if args.repeats < 1:
+        p.error("--repeats must be >= 1")
     if args.precise and (args.quick or args.elements != ["linear"]):
         p.error("--precise runs the linear element's fine tier; it does not combine with --quick "
                 "or --elements")
@@ -354,7 +360,7 @@ def main(argv=None):
     print(NOISE_NOTE)
     rows = []
     for case in args.cases:
-        rows += run_case(case, args.duration, args.quick, args.elements, args.precise)
+        rows += run_case(case, args.duration, args.quick, args.elements, args.precise, args.repeats)
     for case in args.cases:
         print_table([r for r in rows if r["case"] == case], [
             ("code", _label, ""), ("N", "N", "d"), ("method", "method", ""),
@@ -366,7 +372,7 @@ def main(argv=None):
         ], title=f"case {case} (error: RMS end-B tension − reference |F|, over its std)")
     summary = summarise(rows, args.cases)
     write_json(args.json, dict(runs=jsonable(rows), summary=summary, duration_s=args.duration,
-                               quick=args.quick, precise=args.precise))
+                               quick=args.quick, precise=args.precise, repeats=args.repeats))
     if args.plot:
         plot(rows, args.cases, args.plot)
     return 0

@@ -157,7 +157,7 @@ def simulate(
     elif scene.bodies and len(init) == len(scene.lines):
         init = tuple(init) + tuple(b.rest_state() for b in scene.bodies)
     EVALUATIONS[0] = 0
-    res = _integrate(scene, pack(init), p, count=bool(count_newton))
+    res = _integrate(scene, pack(init, host=True), p, count=bool(count_newton))
     if count_newton:
         jax.block_until_ready(res.tension_b)
         evals = EVALUATIONS[0]

@@ -26,6 +26,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from .._numerics import safe_norm
 from ..linalg.banded_solver import dense_lu
@@ -34,21 +35,25 @@ from ..model.grouping import map_lines
 from ..model.line import LineState
 
 
-def _pack_one(s):
+def _pack_one(s, host=False):
     from ..element.hermite_motion import HermiteState
 
     if isinstance(s, LineState):
+        if host and not any(isinstance(x, jax.core.Tracer) for x in (s.r, s.v)):
+            return np.concatenate([np.asarray(s.r), np.asarray(s.v)], axis=-1)
         return jnp.concatenate([s.r, s.v], axis=-1)
     if isinstance(s, HermiteState):
         return s.packed()
     return s
 
 
-def pack(states) -> tuple:
+def pack(states, host: bool = False) -> tuple:
     """States → solver state: each :class:`LineState` to an (n−1, 6) array, each
     :class:`~moorjax.element.hermite_motion.HermiteState` to its (2n, 6) array; body
-    states (1-D arrays) pass through."""
-    return tuple(_pack_one(s) for s in states)
+    states (1-D arrays) pass through. ``host``: a concrete line state is packed
+    by NumPy (for a compiled call's argument, which places it on the device
+    itself: an eager ``jnp.concatenate`` is an XLA program call of about 50 µs)."""
+    return tuple(_pack_one(s, host) for s in states)
 
 
 def unpack(y, lines) -> tuple:
