@@ -236,6 +236,65 @@ def test_stiff_band_against_the_full_jacobian(terms):
         np.testing.assert_allclose(w[:, :, :3], a[:, :, :3], atol=tol * scale)  # ∂/∂r
 
 
+@pytest.mark.parametrize("terms", ["all", "stiff only"])
+def test_time_column_against_the_vector_fields_time_derivative(terms):
+    """W's time column (the linear element in steady water: the end nodes'
+    couplings times the ends' velocity and acceleration) against ∂f/∂t of the
+    whole vector field (forward mode in t). Without drag and added mass: exact.
+    With them: the tangent dependence of the added mass and of the drag on the
+    end's position is left out, as in W's position columns. Only the
+    accelerations of the two nodes next to the ends are not zero."""
+    from moorjax.dynamics.vector_field import pack, stiff_linearisation, vector_field
+    from moorjax.statics import solve_line_statics
+
+    scene = case_b_scene(n=8)
+    if terms == "stiff only":
+        scene = eqx.tree_at(lambda s: (s.lines[0].line_type.drag, s.lines[0].line_type.added_mass),
+                            scene, (None, None), is_leaf=lambda x: x is None)
+    y = pack(tuple(solve_line_statics(ln, scene.env).state() for ln in scene.lines))
+    y = tuple(q.at[:, 3:].add(0.3 * jnp.sin(jnp.arange(q.shape[0]))[:, None]) for q in y)
+    t = 1.3
+    exact = jax.jvp(lambda s: vector_field(s, y, scene), (t,), (1.0,))[1]
+    band, time = stiff_linearisation(t, y, scene)
+    assert band is not None and time is not None
+    for a, w in zip(exact, time):
+        a, w = np.asarray(a), np.asarray(w)
+        scale = np.abs(a).max()
+        assert scale > 0  # the fairlead moves
+        np.testing.assert_array_equal(w[:, :3], 0.0)
+        np.testing.assert_array_equal(w[1:-1], 0.0)
+        tol = 1e-12 if terms == "stiff only" else 0.05
+        print(terms, "largest difference / largest ∂f/∂t", np.abs(w - a).max() / scale)
+        np.testing.assert_allclose(w, a, atol=tol * scale)
+
+
+def test_no_time_column_where_the_water_moves():
+    """Waves or a current that changes in time make the equations depend on t
+    at every node: W then has no time column and the stepper differences the
+    vector field in t."""
+    from moorjax.dynamics.vector_field import pack, stiff_linearisation
+    from moorjax.model.environment import TimeProfileCurrent, UniformCurrent
+    from moorjax.model.waves import AiryWaves, IrregularWave
+    from moorjax.statics import solve_line_statics
+
+    scene = case_b_scene(n=6)
+    y = pack(tuple(solve_line_statics(ln, scene.env).state() for ln in scene.lines))
+    steady = eqx.tree_at(lambda s: s.env.current, scene, UniformCurrent([0.5, 0.0, 0.0]),
+                         is_leaf=lambda x: x is None)
+    assert steady.env.steady and stiff_linearisation(0.0, y, steady)[1] is not None
+    tidal = eqx.tree_at(lambda s: s.env.current, scene,
+                        TimeProfileCurrent([0.0, 10.0], [-100.0, 0.0],
+                                           [[[0.0, 0, 0], [0.2, 0, 0]], [[0.0, 0, 0], [0.4, 0, 0]]]),
+                        is_leaf=lambda x: x is None)
+    waves = eqx.tree_at(lambda s: s.env.waves, scene,
+                        AiryWaves(IrregularWave(0.6, 1.0, 0.0), scene.env.depth),
+                        is_leaf=lambda x: x is None)
+    for moving in (tidal, waves):
+        assert not moving.env.steady
+        band, time = stiff_linearisation(0.0, y, moving)
+        assert band is not None and time is None
+
+
 def test_auto_picks_the_method_by_scene():
     from moorjax.dynamics.settings import plan, resolve_solver
     from moorjax.element import HermiteElement

@@ -34,7 +34,11 @@ factored by the reduced 3×3 block solve of
 prescribed motions) is one forward difference per step
 (:meth:`RosenbrockW._time_derivative`): without it the method drops to order 1
 on a line whose end is driven (measured on a forced stiff scalar problem,
-``tests/test_rosenbrock.py``).
+``tests/test_rosenbrock.py``). Where W's band comes with a time column (lines
+of the linear element in steady water, whose equations depend on time through
+their ends alone: :func:`~moorjax.element.linear.stiff_band`), that column is
+∂f/∂t instead, as a W-method allows (any W, its time column included), and the
+step saves that evaluation (``benchmarks/README.md``, "Session 31").
 
 W is the Jacobian at the step's start by default. ``jacobian_age`` > 1 keeps it
 for that many accepted steps (rebuilding it also after a step cut below
@@ -47,7 +51,8 @@ stiffness of the nodes that touch down or lift off is stale in W (at a fixed
 
 First same as last: f(tₙ₊₁, yₙ₊₁) is evaluated at the end of each step and is
 the next step's f(tₙ, yₙ); a step costs
-five vector-field evaluations (one for the time derivative), the band, one
+five vector-field evaluations (one for the time derivative, none where W has
+a time column), the band, one
 factorisation and five solves (one for the linearisation check).
 
 Outputs between steps are a dense output of order 3 built from the stages
@@ -221,8 +226,10 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
     jacobian_age: int = eqx.field(static=True, default=1)
     shrink: float = eqx.field(static=True, default=0.7)
     structured: bool = eqx.field(static=True, default=True)
-    #: ``band(t, y, args)``: W's block-tridiagonal band, or ``None`` (then and
-    #: without it, the band of the exact Jacobian from 18 coloured JVPs)
+    #: ``band(t, y, args)``: (W's block-tridiagonal band or ``None``, W's time
+    #: column ≈ ∂f/∂t as a pytree like y or ``None``); without a band, the band
+    #: of the exact Jacobian from 18 coloured JVPs, and without a time column
+    #: a forward difference in t (:meth:`_time_derivative`)
     band: Any = eqx.field(static=True, default=None)
     #: ``factors(t, y, args, c)``: each line's factored I − c·J (objects with
     #: ``solve``, :func:`~moorjax.dynamics.vector_field.stage_factors`), used
@@ -248,22 +255,27 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
             raise ValueError("RosenbrockW: factors are rebuilt every step (jacobian_age = 1)")
 
     def _jacobian(self, terms, t, y, args):
+        return self._linearise(terms, t, y, args)[0]
+
+    def _linearise(self, terms, t, y, args):
+        """(W at (t, y), W's time column ≈ ∂f/∂t or ``None``: then
+        :meth:`_time_derivative` differences the vector field)."""
         y = lax.stop_gradient(y)
         if self.factors is not None:  # no W: the factors hold the exact stage matrix
-            return jnp.zeros(())
+            return jnp.zeros(()), None
 
         def f(z):
             return terms.vf(t, z, args)
 
         if self.structured:
-            band = None if self.band is None else self.band(t, y, args)
+            band, time = (None, None) if self.band is None else self.band(t, y, args)
             if band is not None:
-                return lax.stop_gradient(band)
+                return lax.stop_gradient(band), (None if time is None else lax.stop_gradient(time))
             lower, diag, upper, _, _ = band_of(lambda v: jax.jvp(f, (y,), (v,))[1], y)
-            return lax.stop_gradient((lower, diag, upper))
+            return lax.stop_gradient((lower, diag, upper)), None
         flat, unravel = ravel_pytree(y)
         jac = jax.jacfwd(lambda z: ravel_pytree(f(unravel(z)))[0])(flat)
-        return lax.stop_gradient(jac)
+        return lax.stop_gradient(jac), None
 
     def _factor(self, jac, c, y):
         """The factorisation of I − c·W."""
@@ -349,8 +361,9 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
             f0 = terms.vf(t0, y0, args) if made_jump else st.f0
         else:
             f0 = jtu.tree_map(lambda a, b: jnp.where(made_jump, a, b), terms.vf(t0, y0, args), st.f0)
+        time = None  # W's time column: only with a W of this step
         if self.jacobian_age <= 1:
-            jac, age = self._jacobian(terms, t0, y0, args), st.age
+            (jac, time), age = self._linearise(terms, t0, y0, args), st.age
         else:
             stale = (st.age >= self.jacobian_age) | (h < self.shrink * st.h_prev) | made_jump
             jac = lax.cond(stale, lambda: self._jacobian(terms, t0, y0, args), lambda: st.jac)
@@ -361,8 +374,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         else:
             lu = lax.stop_gradient(self.factors(t0, lax.stop_gradient(y0), args, c))
             jac = _Tangent(terms, t0, y0, args)
-        # ∂f/∂t (the prescribed motions)
-        f_t = self._time_derivative(terms, t0, y0, args, f0)
+        # ∂f/∂t (the prescribed motions): W's time column where the band gives one
+        f_t = self._time_derivative(terms, t0, y0, args, f0) if time is None else time
         u = []
         for i in range(len(tab.alpha)):
             if i == 0:

@@ -103,12 +103,12 @@ def make_solver(
         if linear_solver not in LINEAR_SOLVERS:
             raise ValueError(f"unknown linear solver {linear_solver!r}; choose one of "
                              f"{', '.join(LINEAR_SOLVERS)}")
-        from .vector_field import stage_factors, stiff_band
+        from .vector_field import stage_factors, stiff_linearisation
 
         if linear_solver == "element" and not dense_newton:
             return LINEARLY_IMPLICIT[key](structured=False, factors=_ByName(stage_factors))
         structured = not dense_newton and linear_solver != "dense"
-        band = _ByName(stiff_band) if structured else None
+        band = _ByName(stiff_linearisation) if structured else None
         return LINEARLY_IMPLICIT[key](structured=structured, band=band)
     if key not in IMPLICIT:
         raise ValueError(f"unknown solver {name!r}; choose one of {', '.join(SOLVERS)}")

@@ -191,15 +191,26 @@ def stiff_band(t, y, scene):
     node axis (``(lower, diag, upper)``, the layout of
     :func:`~moorjax.linalg.banded_solver.band_of`), or ``None`` (decided at trace
     time) when the scene has bodies or some line's element has no such band."""
+    return stiff_linearisation(t, y, scene)[0]
+
+
+def stiff_linearisation(t, y, scene):
+    """(:func:`stiff_band`, W_t): W_t ≈ ∂(vector field)/∂t, one (rows, 6) array
+    per line as the state (each line's
+    :meth:`~moorjax.element.base.AbstractElement.stiff_linearisation`), or
+    ``None`` when some line has none (then the stepper differences the vector
+    field in t). Structure decides both at trace time."""
     if scene.bodies:
-        return None
-    parts = []
+        return None, None
+    parts, times = [], []
     for line, q in zip(scene.lines, y):
-        band = line.element.stiff_band(line, scene.env, t, q)
+        band, time = line.element.stiff_linearisation(line, scene.env, t, q)
         if band is None:
-            return None
+            return None, None
         parts.append(band)
-    return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
+        times.append(time)
+    band = tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
+    return band, (None if any(x is None for x in times) else tuple(times))
 
 
 def has_stage_factors(scene) -> bool:

@@ -65,6 +65,13 @@ class AbstractElement(eqx.Module):
         del line, env, t, q
         return None
 
+    def stiff_linearisation(self, line, env, t, q):
+        """(:meth:`stiff_band`, W_t): W_t ≈ ∂(state rate)/∂t (rows, 6) where the
+        element gives it cheaply (the Rosenbrock-W stepper's time column), else
+        ``None`` (the stepper then differences the vector field in t).
+        Default: ``(stiff_band(...), None)``."""
+        return self.stiff_band(line, env, t, q), None
+
     def provides_stage_factor(self, line) -> bool:
         """Whether :meth:`stage_factor` returns a factor for ``line``."""
         del line

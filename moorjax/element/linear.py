@@ -175,13 +175,24 @@ class LinearElement(AbstractElement):
         differentiated exactly on its own small function (forward mode), then
         M⁻¹ applied (see :func:`stiff_band`). ``None`` for lines with bending
         (their Jacobian is not block-tridiagonal)."""
+        return self.stiff_linearisation(line, env, t, q)[0]
+
+    def stiff_linearisation(self, line, env, t, q):
+        """(:meth:`stiff_band`, its time column): in steady water the line's
+        equations depend on time through its ends alone, and W's couplings of
+        the end nodes give ∂(state rate)/∂t (see :func:`stiff_band`)."""
         if not self.provides_stiff_band(line):
-            return None
-        return stiff_band(line, env, t, q)
+            return None, None
+        if not env.steady:
+            return stiff_band(line, env, t, q), None
+        return stiff_band(line, env, t, q, with_time=True)
 
 
-def stiff_band(line, env, t, q):
-    """Block-tridiagonal W ≈ ∂[v, a]/∂[r, v] of a line's free nodes (rows, 6, 6 ×3).
+def stiff_band(line, env, t, q, with_time: bool = False):
+    """Block-tridiagonal W ≈ ∂[v, a]/∂[r, v] of a line's free nodes (rows, 6, 6 ×3);
+    ``with_time``: ``(band, W_t)`` with W_t ≈ ∂[v, a]/∂t (rows, 6) from the
+    same couplings to the end nodes, valid where time enters only through the
+    ends' motions (steady water).
 
     Exact for the terms that make a mooring line stiff, each differentiated by
     forward mode on its own small function rather than through the whole
@@ -197,6 +208,16 @@ def stiff_band(line, env, t, q):
     dependence of the mass matrix (added mass), drag, fluid inertia and
     buoyancy on the tangents and wet lengths, and of currents and waves on the
     node positions. a = M⁻¹F with M the nodal mass at the current tangents.
+
+    The time column: a free node next to an end feels the end's motion through
+    the segment between them, W_t = M⁻¹(K_d·ṙ_end + K_v·r̈_end) on the
+    accelerations of nodes 1 and n−1 (K_d, K_v the segment force's derivatives
+    in its chord and relative velocity, as in the band) and 0 elsewhere. It
+    replaces the Rosenbrock-W stepper's forward difference of the whole vector
+    field in t (:meth:`~moorjax.dynamics.rosenbrock.RosenbrockW._time_derivative`),
+    with the same terms left out as W leaves out: the W-method's order
+    conditions hold for any W, its time column included (Hairer & Wanner II,
+    IV.7, the autonomous form).
     """
     from ..model.line import LineState
     from .mass import _segment_mass_tensors
@@ -254,7 +275,15 @@ def stiff_band(line, env, t, q):
     upper = jnp.concatenate([top, rows(f_r_next[1:], f_v_next[1:])], axis=1)  # K_k, k=1..n−1
     lower = lower.at[0].set(0.0)  # node 0 is an end, not a state
     upper = upper.at[-1].set(0.0)  # node n likewise
-    return lower, diag, upper
+    if not with_time:
+        return lower, diag, upper
+    # ∂F_1/∂[r_0, v_0] = [K_d, K_v] of segment 0, ∂F_{n−1}/∂[r_n, v_n] of segment n−1
+    ends = ((0, 0, line.end_a), (-1, -1, line.end_b))
+    time = jnp.zeros((n_free, 6), dtype=q.dtype)
+    for row, seg, end in ends:
+        pull = btd.bmv(k_d[seg], end.velocity(t)) + btd.bmv(k_v[seg], end.acceleration(t))
+        time = time.at[row, 3:].add(btd.bmv(m_inv[row], pull))
+    return (lower, diag, upper), time
 
 
 def bending_energy(ei, l, r):

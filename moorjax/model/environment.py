@@ -8,6 +8,7 @@ them never traces contact, current or wave terms.
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -199,6 +200,10 @@ class AbstractCurrent(eqx.Module):
     bodies as a depth profile does.
     """
 
+    #: the field does not change in time (structure: a class's answer, not a
+    #: value's); unknown fields are taken to change
+    time_invariant: ClassVar[bool] = False
+
     @abc.abstractmethod
     def velocity_at(self, position: Array, t=0.0) -> Array:
         """Current velocity (..., 3) [m/s] at positions (..., 3) [m] and time t [s]."""
@@ -218,6 +223,7 @@ class AbstractDepthCurrent(AbstractCurrent):
 class UniformCurrent(AbstractDepthCurrent):
     """The same current at every depth. ``velocity``: (3,) [m/s]."""
 
+    time_invariant: ClassVar[bool] = True
     u: Array
 
     def __init__(self, velocity):
@@ -236,6 +242,7 @@ class ProfileCurrent(AbstractDepthCurrent):
         velocity: (len(z), 3) current velocities [m/s].
     """
 
+    time_invariant: ClassVar[bool] = True
     z: Array
     u: Array
 
@@ -412,6 +419,13 @@ class Environment(eqx.Module):
         import jax
 
         return jax.vmap(bathymetry.height)(jnp.ravel(x), jnp.ravel(y)).reshape(jnp.shape(x))
+
+    @property
+    def steady(self) -> bool:
+        """Whether the water does not change in time (no waves, no current or a
+        time-invariant one): then a line's equations depend on time only through
+        its ends' motions (structure, decided at trace time)."""
+        return self.waves is None and (self.current is None or self.current.time_invariant)
 
     def without_waves(self) -> "Environment":
         """The same water without waves: the mean state that statics solve for."""
