@@ -97,14 +97,14 @@ QUICK = {
                       (20, "heun", None, 6.25e-3), (40, "heun", None, 3.125e-3),
                       (40, "auto", (1e-5, 1e-4), None),
                       (40, "ros34pw2", (1e-5, 1e-4), None), (40, "ros34pw2", (1e-4, 1e-3), None),
-                      (20, "ros34pw2", ROS_TIGHT, None),
+                      (40, "ros34pw2", ROS_LOOSE, None), (20, "ros34pw2", ROS_TIGHT, None),
                       (20, "implicit_euler", None, 2e-3)],
                 "B": [(10, "kvaerno5", (1e-5, 1e-4), None), (10, "kvaerno3", (1e-5, 1e-4), None),
                       (20, "kvaerno3", (1e-5, 1e-4), None), (20, "kvaerno5", (1e-6, 1e-5), None),
                       (10, "auto", (1e-5, 1e-4), None),
                       (10, "heun", None, 1.667e-3), (10, "ros34pw2", (1e-4, 1e-3), None),
                       (10, "ros34pw2", (1e-5, 1e-4), None), (20, "ros34pw2", (1e-4, 1e-3), None),
-                      (10, "ros34pw2", ROS_LOOSE, None),
+                      (10, "ros34pw2", ROS_LOOSE, None), (10, "ros34pw2", ROS_LOOSEST, None),
                       (20, "implicit_euler", None, 2e-3)]},
 }
 
