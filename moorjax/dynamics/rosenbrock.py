@@ -37,7 +37,8 @@ on a line whose end is driven (measured on a forced stiff scalar problem,
 ``tests/test_rosenbrock.py``). Where W's band comes with a time column (lines
 of the linear element in steady water, whose equations depend on time through
 their ends alone: :func:`~moorjax.element.linear.stiff_band`), that column is
-∂f/∂t instead, as a W-method allows (any W, its time column included), and the
+∂f/∂t instead, as a W-method allows (its order-2 conditions hold for any W, and
+in the autonomous form the time column is one more column of W), and the
 step saves that evaluation (``benchmarks/README.md``, "Session 31").
 
 W is the Jacobian at the step's start by default. ``jacobian_age`` > 1 keeps it

@@ -215,9 +215,9 @@ def stiff_band(line, env, t, q, with_time: bool = False):
     in its chord and relative velocity, as in the band) and 0 elsewhere. It
     replaces the Rosenbrock-W stepper's forward difference of the whole vector
     field in t (:meth:`~moorjax.dynamics.rosenbrock.RosenbrockW._time_derivative`),
-    with the same terms left out as W leaves out: the W-method's order
-    conditions hold for any W, its time column included (Hairer & Wanner II,
-    IV.7, the autonomous form).
+    with the same terms left out as W leaves out: ROS34PW2's W-method order
+    conditions (order 2 for any W) hold for any time column too, since in the
+    autonomous form (Hairer & Wanner II, IV.7) it is one more column of W.
     """
     from ..model.line import LineState
     from .mass import _segment_mass_tensors
