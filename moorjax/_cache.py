@@ -363,7 +363,7 @@ class StoredProgram:
                 self._programs[key] = (call, out_tree, out_static)
         out = jax.tree_util.tree_unflatten(out_tree, call(*leaves))
         # outputs that are all arrays need no combine (a tree walk of ~15 µs)
-        return eqx.combine(out, out_static) if _has_leaves(out_static) else out
+        return out if out_static is None else eqx.combine(out, out_static)
 
     def _load(self, folder, key):
         import pickle
@@ -382,7 +382,7 @@ class StoredProgram:
             out_tree = jax.tree_util.tree_structure(template)
         except Exception:  # absent, partly written or from another layout: export anew
             return None
-        program = (jax.jit(exported.call), out_tree, out_static)
+        program = (jax.jit(exported.call), out_tree, _static_part(out_static))
         self._programs[key] = program
         return program
 
@@ -417,7 +417,7 @@ class StoredProgram:
             self._programs[key] = _UNSTORABLE
             _write(folder, key + ".none", b"")
             return _UNSTORABLE
-        program = (jax.jit(exported.call), found["tree"], found["static"])
+        program = (jax.jit(exported.call), found["tree"], _static_part(found["static"]))
         self._programs[key] = program
         try:
             meta = pickle.dumps((found["template"], found["static"]))
@@ -474,11 +474,12 @@ def _layout(x) -> str | None:
     return f"@{dict(mesh.shape)}{tuple(spec)}"
 
 
-def _has_leaves(tree) -> bool:
-    """Whether ``tree`` (a program's static outputs) holds anything but ``None``."""
+def _static_part(tree):
+    """A program's static outputs as stored beside it: ``None`` where they hold
+    nothing but ``None`` (decided once, so that a call skips ``eqx.combine``)."""
     import jax
 
-    return bool(jax.tree_util.tree_leaves(tree))
+    return tree if jax.tree_util.tree_leaves(tree) else None
 
 
 def _array_or_spec(x) -> bool:

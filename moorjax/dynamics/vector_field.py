@@ -190,8 +190,14 @@ def stiff_band(t, y, scene):
     :meth:`~moorjax.element.base.AbstractElement.stiff_band` stacked along the
     node axis (``(lower, diag, upper)``, the layout of
     :func:`~moorjax.linalg.banded_solver.band_of`), or ``None`` (decided at trace
-    time) when the scene has bodies or some line's element has no such band."""
-    return stiff_linearisation(t, y, scene)[0]
+    time) when the scene has bodies or some line's element has no such band.
+    Builds no time column (see :func:`stiff_linearisation`)."""
+    if scene.bodies:
+        return None
+    parts = [line.element.stiff_band(line, scene.env, t, q) for line, q in zip(scene.lines, y)]
+    if any(band is None for band in parts):
+        return None
+    return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
 
 
 def stiff_linearisation(t, y, scene):

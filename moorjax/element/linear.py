@@ -175,7 +175,9 @@ class LinearElement(AbstractElement):
         differentiated exactly on its own small function (forward mode), then
         M⁻¹ applied (see :func:`stiff_band`). ``None`` for lines with bending
         (their Jacobian is not block-tridiagonal)."""
-        return self.stiff_linearisation(line, env, t, q)[0]
+        if not self.provides_stiff_band(line):
+            return None
+        return stiff_band(line, env, t, q)
 
     def stiff_linearisation(self, line, env, t, q):
         """(:meth:`stiff_band`, its time column): in steady water the line's
