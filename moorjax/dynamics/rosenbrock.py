@@ -27,9 +27,12 @@ make (:meth:`RosenbrockW._with_linearisation_error`), O(h³) where f is smooth.
 With it the same run takes 71 steps (5 rejected) and stays within 0.29 std
 (6.4 % at rtol 3e-6), and reference case A reaches Kvaerno5's error at the same
 tolerances (N = 40, rtol 1e-5: 0.82 % against 0.84 %; without the check
-1.09 %). The matrix I − γhW is built
-from W's block-tridiagonal band (18 coloured JVPs of the vector field) and
-factored by the reduced 3×3 block solve of
+1.09 %). For lines of the linear element W comes in mass form
+(:class:`~moorjax.linalg.mass_form.MassFormW`: nodal masses and 3×3
+block-tridiagonal force derivatives, each differentiated on its own small
+function), and I − γhW is solved through one 3×3 block-tridiagonal system in
+the velocities; otherwise W is the block-tridiagonal band of the Jacobian (18
+coloured JVPs of the vector field), factored by the reduced 3×3 block solve of
 :class:`~moorjax.linalg.banded_solver.SecondOrderBandSolver`. ∂f/∂t (the
 prescribed motions) is one forward difference per step
 (:meth:`RosenbrockW._time_derivative`): without it the method drops to order 1
@@ -84,6 +87,7 @@ from jax.flatten_util import ravel_pytree
 
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import SecondOrderBandSolver, _flatten, _unflatten, band_of
+from ..linalg.mass_form import MassFormFactor, MassFormW
 
 
 class Tableau(eqx.Module):
@@ -199,6 +203,14 @@ class _State(eqx.Module):
     h_prev: Any  # the last accepted step [s]
 
 
+def _on_rows(fn, v):
+    """``fn`` on the lines' (rows, 6) leaves of v stacked along the row axis,
+    split back into v's pytree."""
+    leaves, treedef = jtu.tree_flatten(v)
+    sizes = tuple(int(x.shape[0]) for x in leaves)
+    return _unflatten(fn(_flatten(v, sizes)), treedef, sizes)
+
+
 def _combine(terms_):
     """Σ cᵢ·xᵢ over pytrees, skipping zero coefficients (static)."""
     terms_ = [(c, x) for c, x in terms_ if not (isinstance(c, float) and c == 0.0)]
@@ -280,6 +292,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
 
     def _factor(self, jac, c, y):
         """The factorisation of I − c·W."""
+        if isinstance(jac, MassFormW):
+            return jac.factor(c)
         if self.structured:
             lower, diag, upper = jac
             eye = jnp.eye(diag.shape[-1], dtype=diag.dtype)
@@ -294,6 +308,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         """W·v (same pytree as v)."""
         if isinstance(jac, _Tangent):
             return jac(v)
+        if isinstance(jac, MassFormW):
+            return _on_rows(jac.matvec, v)
         if self.structured:
             leaves, treedef = jtu.tree_flatten(v)
             sizes = tuple(int(x.shape[0]) for x in leaves)
@@ -338,6 +354,8 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
     def _solve(self, lu, rhs):
         if self.factors is not None:
             return tuple(f.solve(r) for f, r in zip(lu, rhs))
+        if isinstance(lu, MassFormFactor):
+            return _on_rows(lu.solve, rhs)
         if self.structured:
             return SecondOrderBandSolver()._compute_band(lu, rhs)
         flat, unravel = ravel_pytree(rhs)

@@ -188,16 +188,21 @@ def has_stiff_band(scene) -> bool:
 def stiff_band(t, y, scene):
     """W ≈ ∂(vector field)/∂y for a Rosenbrock-W stepper: each line's
     :meth:`~moorjax.element.base.AbstractElement.stiff_band` stacked along the
-    node axis (``(lower, diag, upper)``, the layout of
-    :func:`~moorjax.linalg.banded_solver.band_of`), or ``None`` (decided at trace
-    time) when the scene has bodies or some line's element has no such band.
+    node axis (a :class:`~moorjax.linalg.mass_form.MassFormW`), or ``None``
+    (decided at trace time) when the scene has bodies or some line's element
+    has no such band.
     Builds no time column (see :func:`stiff_linearisation`)."""
     if scene.bodies:
         return None
     parts = [line.element.stiff_band(line, scene.env, t, q) for line, q in zip(scene.lines, y)]
     if any(band is None for band in parts):
         return None
-    return tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
+    return _stacked(parts)
+
+
+def _stacked(parts):
+    """Lines' W stacked along the node axis (lines do not couple)."""
+    return jax.tree_util.tree_map(lambda *x: jnp.concatenate(x, axis=0), *parts)
 
 
 def stiff_linearisation(t, y, scene):
@@ -215,8 +220,7 @@ def stiff_linearisation(t, y, scene):
             return None, None
         parts.append(band)
         times.append(time)
-    band = tuple(jnp.concatenate(x, axis=0) for x in zip(*parts))
-    return band, (None if any(x is None for x in times) else tuple(times))
+    return _stacked(parts), (None if any(x is None for x in times) else tuple(times))
 
 
 def has_stage_factors(scene) -> bool:

@@ -58,10 +58,11 @@ class AbstractElement(eqx.Module):
 
     def stiff_band(self, line, env, t, q):
         """An approximation W of the Jacobian of :meth:`state_rate` for a
-        Rosenbrock-W stepper: ``(lower, diag, upper)``, each (rows, 6, 6) in the
-        packed [r, v] layout (``lower[i]`` couples row i to row i−1), or ``None``
-        when the element has none (the stepper then differentiates the whole
-        vector field). Default: ``None``."""
+        Rosenbrock-W stepper in the packed [r, v] rows, a
+        :class:`~moorjax.linalg.mass_form.MassFormW` (nodal masses and 3×3
+        block-tridiagonal force derivatives), or ``None`` when the element has
+        none (the stepper then differentiates the whole vector field).
+        Default: ``None``."""
         del line, env, t, q
         return None
 

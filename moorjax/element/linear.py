@@ -43,6 +43,7 @@ import jax.numpy as jnp
 
 from .._numerics import safe_unit
 from ..linalg import block_tridiagonal as btd
+from ..linalg.mass_form import MassFormW
 from ..model.ends import clamp_directions
 from . import morison
 from .base import AbstractElement
@@ -172,8 +173,8 @@ class LinearElement(AbstractElement):
 
     def stiff_band(self, line, env, t, q):
         """W ≈ ∂(state rate)/∂q from the terms that make a line stiff, each
-        differentiated exactly on its own small function (forward mode), then
-        M⁻¹ applied (see :func:`stiff_band`). ``None`` for lines with bending
+        differentiated exactly on its own small function (forward mode), in
+        mass form (see :func:`stiff_band`). ``None`` for lines with bending
         (their Jacobian is not block-tridiagonal)."""
         if not self.provides_stiff_band(line):
             return None
@@ -191,8 +192,10 @@ class LinearElement(AbstractElement):
 
 
 def stiff_band(line, env, t, q, with_time: bool = False):
-    """Block-tridiagonal W ≈ ∂[v, a]/∂[r, v] of a line's free nodes (rows, 6, 6 ×3);
-    ``with_time``: ``(band, W_t)`` with W_t ≈ ∂[v, a]/∂t (rows, 6) from the
+    """W ≈ ∂[v, a]/∂[r, v] of a line's free nodes in mass form
+    (:class:`~moorjax.linalg.mass_form.MassFormW`: the nodal masses M and the
+    3×3 block-tridiagonal force derivatives K_r, K_v, W = [[0, I], [M⁻¹K_r,
+    M⁻¹K_v]]); ``with_time``: ``(W, W_t)`` with W_t ≈ ∂[v, a]/∂t (rows, 6) from the
     same couplings to the end nodes, valid where time enters only through the
     ends' motions (steady water).
 
@@ -264,28 +267,23 @@ def stiff_band(line, env, t, q, with_time: bool = False):
         f_v_self = f_v_self + columns(drag, v)  # relative velocity: ∂u/∂v = I
 
     mu = _segment_mass_tensors(line, env, tangent, wet)  # added mass of the wet length
-    m_inv = btd.inv3(0.5 * (mu[:-1] + mu[1:]))  # free nodes 1..n−1
+    mass = 0.5 * (mu[:-1] + mu[1:])  # free nodes 1..n−1
+    m_inv = btd.inv3(mass)
 
-    def rows(f_r, f_v):
-        return jnp.concatenate([btd.bmm(m_inv, f_r), btd.bmm(m_inv, f_v)], axis=-1)  # (n−1, 3, 6)
+    def band(prev, own, nxt):  # node k couples to k−1 through K_{k−1}, to k+1 through K_k
+        return prev[:-1].at[0].set(0.0), own[1:-1], nxt[1:].at[-1].set(0.0)  # nodes 0, n: ends
 
-    n_free = q.shape[0]
-    top = jnp.zeros((n_free, 3, 6))
-    eye_top = top.at[:, :, 3:].set(jnp.eye(3))
-    diag = jnp.concatenate([eye_top, rows(f_r_self[1:-1], f_v_self[1:-1])], axis=1)
-    lower = jnp.concatenate([top, rows(f_r_prev[:-1], f_v_prev[:-1])], axis=1)  # K_{k−1}, k=1..n−1
-    upper = jnp.concatenate([top, rows(f_r_next[1:], f_v_next[1:])], axis=1)  # K_k, k=1..n−1
-    lower = lower.at[0].set(0.0)  # node 0 is an end, not a state
-    upper = upper.at[-1].set(0.0)  # node n likewise
+    w = MassFormW(mass=mass, mass_inv=m_inv, k_r=band(f_r_prev, f_r_self, f_r_next),
+                  k_v=band(f_v_prev, f_v_self, f_v_next))
     if not with_time:
-        return lower, diag, upper
+        return w
     # ∂F_1/∂[r_0, v_0] = [K_d, K_v] of segment 0, ∂F_{n−1}/∂[r_n, v_n] of segment n−1
     ends = ((0, 0, line.end_a), (-1, -1, line.end_b))
-    time = jnp.zeros((n_free, 6), dtype=q.dtype)
+    time = jnp.zeros((q.shape[0], 6), dtype=q.dtype)
     for row, seg, end in ends:
         pull = btd.bmv(k_d[seg], end.velocity(t)) + btd.bmv(k_v[seg], end.acceleration(t))
         time = time.at[row, 3:].add(btd.bmv(m_inv[row], pull))
-    return (lower, diag, upper), time
+    return w, time
 
 
 def bending_energy(ei, l, r):
