@@ -18,9 +18,11 @@ from ._cache import enable_compilation_cache as _enable_cache  # noqa: E402
 
 _enable_cache(_jax)
 
+from ._xla_flags import prefer_one_intra_op_thread as _prefer_one_thread  # noqa: E402
 from ._xla_flags import prefer_sequential_schedule as _prefer_sequential  # noqa: E402
 
 _prefer_sequential()
+_prefer_one_thread()
 
 from .model import *  # noqa: E402,F401,F403
 from .model import __all__ as _model_all  # noqa: E402,F401

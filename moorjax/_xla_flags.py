@@ -21,6 +21,20 @@ XLA reads ``XLA_FLAGS`` once, when JAX first computes something (not at
 The flag only affects XLA:CPU; GPU and TPU backends ignore it. It is part of
 JAX's persistent compilation-cache key, so executables compiled with and without
 it are kept apart.
+
+The schedule only orders the tasks: XLA:CPU's executor still hands a task to
+another thread of its pool whenever the program's dependency graph allows two
+at once (it keeps to one thread only where every buffer is under 512 bytes,
+an option it reads from no flag). A line's W in mass form (3×3 blocks for the
+masses and the two force derivatives instead of 6×6 blocks,
+:mod:`moorjax.linalg.mass_form`) gives the graph such branches, and a step of
+case A, N = 40, went from 73 to 100 µs on two threads. So
+:func:`prefer_one_intra_op_thread` sets ``PJRT_NPROC=1`` (read by XLA when the
+CPU client starts: the size of its task pools) under the same conditions as
+the flag, and only where no GPU or TPU plugin is installed. Ensembles keep
+their parallelism: each CPU device (``--cpu-devices``) runs on its own thread
+(200 members, two devices: 5.49 s with the pools at two threads, 5.42 s at
+one; ``benchmarks/README.md``, session 32).
 """
 
 from __future__ import annotations
@@ -83,3 +97,37 @@ def prefer_sequential_schedule() -> bool:
         True when the flag was added by this call.
     """
     return wanted() and set_flag(FLAG, VALUE, keep_user=True)
+
+
+#: the environment variable XLA:CPU sizes its task pools by, and moorjax's value
+NPROC = "PJRT_NPROC"
+
+
+def _accelerator_plugin() -> bool:
+    """Whether a JAX GPU or TPU plugin is installed (its client may size its
+    own pools by the same variable: leave those alone)."""
+    import importlib.util
+
+    names = ("jax_cuda12_plugin", "jax_cuda13_plugin", "jax_rocm60_plugin", "jax_rocm7_plugin",
+             "libtpu", "jax_tpu_plugin")
+    return any(importlib.util.find_spec(n) is not None for n in names)
+
+
+def prefer_one_intra_op_thread() -> bool:
+    """Set ``PJRT_NPROC=1`` where that is still possible and wanted (module
+    docstring): not once a JAX backend has started, not over the user's value,
+    not with ``MOORJAX_XLA_TUNING=0``, not with ``JAX_PLATFORMS`` naming
+    anything but ``cpu`` or with an accelerator plugin installed.
+
+    Returns:
+        True when the variable was set by this call.
+    """
+    if not wanted() or NPROC in os.environ or _backend_started():
+        return False
+    platforms = os.environ.get("JAX_PLATFORMS", "").strip().lower()
+    if platforms and platforms != "cpu":
+        return False
+    if not platforms and _accelerator_plugin():
+        return False
+    os.environ[NPROC] = "1"
+    return True

@@ -13,7 +13,8 @@ FLAG = f"--{_xla_flags.FLAG}"
 
 
 def _env(**extra):
-    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "MOORJAX_XLA_TUNING")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("XLA_FLAGS", "MOORJAX_XLA_TUNING", "PJRT_NPROC", "JAX_PLATFORMS")}
     env.update(PYTHONPATH=ROOT, MOORJAX_COMPILATION_CACHE="0", **extra)
     return env
 
@@ -85,3 +86,22 @@ def test_set_flag_keeps_or_replaces_a_value_and_the_other_flags():
             f"assert not X.set_flag({count!r}, 5, keep_user=True); "
             "assert X.set_flag('b', 'x', keep_user=True)")
     assert _flags_after(code, MOORJAX_XLA_TUNING="0") == f"--{count}_x=7 --a=1 --{count}=2 --b=x"
+
+
+def _nproc_after(code, **extra):
+    show = "\nimport json, os; print(json.dumps(os.environ.get('PJRT_NPROC')))"
+    out = subprocess.run([sys.executable, "-c", code + show], env=_env(**extra), capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_one_intra_op_thread_unless_the_user_or_a_platform_says_otherwise():
+    """``PJRT_NPROC=1`` at import (XLA:CPU's task pools of one thread), never
+    over the user's value, not with the switch off, not once JAX has computed,
+    and not where JAX is told to use another platform."""
+    assert _nproc_after("import moorjax") == "1"
+    assert _nproc_after("import moorjax", PJRT_NPROC="2") == "2"
+    assert _nproc_after("import moorjax", MOORJAX_XLA_TUNING="off") is None
+    assert _nproc_after("import moorjax", JAX_PLATFORMS="cuda") is None
+    assert _nproc_after("import moorjax", JAX_PLATFORMS="cpu") == "1"
+    assert _nproc_after("import jax.numpy as jnp; jnp.ones(2).block_until_ready(); import moorjax") is None
