@@ -19,11 +19,16 @@ def _env(**extra):
     return env
 
 
-def _flags_after(code, **extra):
-    show = "\nimport json, os; print(json.dumps(os.environ.get('XLA_FLAGS')))"
+def _variable_after(name, code, **extra):
+    """The environment variable ``name`` in a fresh process after ``code``."""
+    show = f"\nimport json, os; print(json.dumps(os.environ.get({name!r})))"
     out = subprocess.run([sys.executable, "-c", code + show], env=_env(**extra), capture_output=True,
                          text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _flags_after(code, **extra):
+    return _variable_after("XLA_FLAGS", code, **extra)
 
 
 def test_import_adds_the_flag_and_keeps_the_users_flags():
@@ -89,10 +94,7 @@ def test_set_flag_keeps_or_replaces_a_value_and_the_other_flags():
 
 
 def _nproc_after(code, **extra):
-    show = "\nimport json, os; print(json.dumps(os.environ.get('PJRT_NPROC')))"
-    out = subprocess.run([sys.executable, "-c", code + show], env=_env(**extra), capture_output=True,
-                         text=True, check=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return _variable_after("PJRT_NPROC", code, **extra)
 
 
 def test_one_intra_op_thread_unless_the_user_or_a_platform_says_otherwise():

@@ -311,9 +311,7 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         if isinstance(jac, MassFormW):
             return _on_rows(jac.matvec, v)
         if self.structured:
-            leaves, treedef = jtu.tree_flatten(v)
-            sizes = tuple(int(x.shape[0]) for x in leaves)
-            return _unflatten(btd.matvec(*jac, _flatten(v, sizes)), treedef, sizes)
+            return _on_rows(lambda x: btd.matvec(*jac, x), v)
         flat, unravel = ravel_pytree(v)
         return unravel(jac @ flat)
 
