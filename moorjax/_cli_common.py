@@ -3,7 +3,7 @@ clipping, the ``example:NAME`` deck argument, and the argument types and
 options (dynamics settings) of several sub-commands.
 
 Kept apart from :mod:`moorjax.cli` so that sub-command modules
-(:mod:`moorjax.identify.cli`, ...) need not import the command line that
+(:mod:`moorjax._cli_fit`, ...) need not import the command line that
 imports them.
 """
 

@@ -279,7 +279,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_ensemble_parser(sub)
 
-    from .identify.cli import add_parser as add_fit_parser
+    from ._cli_fit import add_parser as add_fit_parser
 
     add_fit_parser(sub)
 

@@ -247,3 +247,16 @@ def test_statics_method_catenary_is_refused_where_it_cannot_hold(capsys):
         rc = main(["statics", str(deck), "--method", "catenary"])
         err = capsys.readouterr().err
         assert rc == 2 and why in err and "auto" in err, err
+
+
+def test_building_the_parser_leaves_the_fitting_machinery_unloaded():
+    """Every command builds the whole parser, ``fit``'s included; only ``moorjax
+    fit`` itself loads optax and moorjax.identify (a fresh interpreter: this
+    one's tests may have loaded them)."""
+    import subprocess
+    import sys
+
+    probe = ("import sys; from moorjax.cli import build_parser; build_parser(); "
+             "print(sorted(m for m in ('optax', 'moorjax.identify') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
