@@ -13,7 +13,8 @@ loss history and status.
 
 Beside :mod:`moorjax.identify`, not in it: every command line builds this
 parser, and importing the package loads the fitting machinery (optax), which
-no other command needs (0.06–0.1 s of each call).
+no other command needs (0.06 s of import time; ``moorjax statics`` on the built-in
+example went from 1.38 to 1.345 s, medians of six).
 """
 
 from __future__ import annotations
