@@ -120,10 +120,10 @@ def cmd_fit(args) -> int:
     from ._cli_common import deck_path
     from ._cli_load import element_from, graded_as_asked
     from ._progress import Progress, enabled
-    from .io.results import check_output
     from .identify.experiment import load_experiment
     from .identify.fit import default_optimizer, fit
     from .identify.free import Free
+    from .io.results import check_output
 
     if args.steps < 0:
         raise ValueError(f"--steps = {args.steps} must be >= 0")
