@@ -231,12 +231,16 @@ class StoredProgram:
     store), or when the structure has no stable text.
     """
 
-    def __init__(self, fn, storable=None, sharded=False):
-        import equinox as eqx
-
+    def __init__(self, fn, storable=None, sharded=False, compile_for=None):
         self.fn = fn
-        self.jitted = eqx.filter_jit(fn)
         self.storable = storable
+        #: what XLA compiles the program for (:func:`moorjax._xla_flags.compiler_options`):
+        #: ``"runs"`` (a time integration, run many times), ``"once"`` (a static
+        #: solve, run once per structure: compiled faster, runs slower) or ``None``
+        #: (XLA's defaults). Only a call outside any trace takes them: under a
+        #: caller's ``jit``/``grad``/``vmap`` the caller's program is what compiles.
+        self.compile_for = compile_for
+        self._jitted = {}  # options' text → eqx.filter_jit(fn, compiler_options=...)
         #: arguments may be sharded over several devices (an ensemble's members):
         #: each leaf's sharding is then part of the key and of the stored program
         self.sharded = sharded
@@ -244,6 +248,28 @@ class StoredProgram:
         self._ahead = {}  # key → Future of a compiled program (compile_ahead)
         self._keys = {}  # argument structure → key (see key)
         _INSTANCES.add(self)
+
+    def compiler_options(self) -> dict | None:
+        """The XLA options of a call made now (``None``: XLA's defaults and
+        ``XLA_FLAGS``): this program's ``compile_for`` preset at the top level,
+        ``None`` inside a trace (a nested ``jit`` takes no options)."""
+        if self.compile_for is None or _top_level() is not True:
+            return None
+        from ._xla_flags import compiler_options
+
+        return compiler_options(self.compile_for)
+
+    @property
+    def jitted(self):
+        """``eqx.filter_jit(fn)``, with this program's compiler options where a
+        call made now takes them."""
+        options = self.compiler_options()
+        text = repr(sorted(options.items())) if options else ""
+        if text not in self._jitted:
+            import equinox as eqx
+
+            self._jitted[text] = eqx.filter_jit(self.fn, compiler_options=options)
+        return self._jitted[text]
 
     def key(self, treedef, dynamic, static_leaves, leaves):
         """The stored program's key (``None``: not storable) of arguments whose
@@ -298,6 +324,8 @@ class StoredProgram:
         folder = programs_dir() if enabled() and _can_serialise() else None
         if folder is None or (self.storable is not None and not self.storable(*args, **kwargs)):
             return None
+        if self.compile_for is not None and _top_level() is False:
+            return None  # inlined into the caller's program, which compiles it
         every, treedef = jax.tree_util.tree_flatten((args, kwargs))
         dynamic = tuple(_array_or_spec(x) for x in every)
         leaves = [x for x, d in zip(every, dynamic) if d]
@@ -345,12 +373,26 @@ class StoredProgram:
         return True
 
     def __call__(self, *args, **kwargs):
+        try:
+            found = self._program(args, kwargs)
+            if found is None:
+                return self.jitted(*args, **kwargs)
+            return self._run(found)
+        except Exception as exc:  # a jaxlib that does not know an option: drop the options
+            from ._xla_flags import reject_options
+
+            if self.compile_for is None or not reject_options(exc):
+                raise
+            for program in list(_INSTANCES):
+                program._programs.clear()
+                program._ahead.clear()
+                program._jitted.clear()
+            return self(*args, **kwargs)
+
+    def _run(self, found):
         import equinox as eqx
         import jax
 
-        found = self._program(args, kwargs)
-        if found is None:
-            return self.jitted(*args, **kwargs)
         key, (call, out_tree, out_static), leaves = found
         ahead = self._ahead.pop(key, None)
         self._ahead.clear()  # prepared for calls that did not come: let them go
@@ -382,7 +424,8 @@ class StoredProgram:
             out_tree = jax.tree_util.tree_structure(template)
         except Exception:  # absent, partly written or from another layout: export anew
             return None
-        program = (jax.jit(exported.call), out_tree, _static_part(out_static))
+        program = (jax.jit(exported.call, compiler_options=self.compiler_options()), out_tree,
+                   _static_part(out_static))
         self._programs[key] = program
         return program
 
@@ -417,7 +460,8 @@ class StoredProgram:
             self._programs[key] = _UNSTORABLE
             _write(folder, key + ".none", b"")
             return _UNSTORABLE
-        program = (jax.jit(exported.call), found["tree"], _static_part(found["static"]))
+        program = (jax.jit(exported.call, compiler_options=self.compiler_options()), found["tree"],
+                   _static_part(found["static"]))
         self._programs[key] = program
         try:
             meta = pickle.dumps((found["template"], found["static"]))
@@ -433,6 +477,18 @@ _INSTANCES = weakref.WeakSet()
 
 #: compiles started by ``compile_ahead`` that have not finished (used or not)
 _IN_FLIGHT = set()
+
+
+def _top_level() -> bool | None:
+    """Whether no JAX trace (``jit``, ``grad``, ``vmap``) is running; ``None``
+    where this JAX does not say (its private ``trace_ctx``): options are then
+    never passed."""
+    try:
+        from jax._src import core
+
+        return bool(core.trace_ctx.is_top_level())
+    except Exception:  # pragma: no cover - another JAX layout
+        return None
 
 
 def compiling() -> bool:

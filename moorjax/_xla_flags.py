@@ -131,3 +131,48 @@ def prefer_one_intra_op_thread() -> bool:
         return False
     os.environ[NPROC] = "1"
     return True
+
+
+
+#: Per-program XLA:CPU options (``jax.jit``'s ``compiler_options``) by what a
+#: program is compiled for. XLA:CPU's MLIR fusion emitters cost compile time and
+#: buy nothing measurable in moorjax's programs of small kernels: without them
+#: the integration of ``oc3_catenary`` compiles in 5.0 instead of 7.1 s (N = 20)
+#: and case A's (N = 40) in 5.3 instead of 8.1 s, at the same cost per step
+#: (ROS34PW2 and Kvaerno5 on cases A and B). A static solve runs once per
+#: structure and process, so it is also compiled without XLA's optimisation
+#: passes: 5.7 -> 2.4 s for a line's statics, 1 -> 2.7 ms to run. Measured in
+#: ``benchmarks/README.md``, session 34. Options change rounding, not results
+#: beyond it. Per program, not in ``XLA_FLAGS``: the user's own programs keep
+#: XLA's defaults, and an option a jaxlib does not know fails the compile with
+#: an error (:func:`reject_options`) where an unknown flag would end the process.
+PRESETS = {
+    "runs": (("xla_cpu_use_fusion_emitters", False),),
+    "once": (("xla_cpu_use_fusion_emitters", False), ("xla_backend_optimization_level", 0)),
+}
+
+_rejected = []  # the error of a jaxlib that did not take the options, once seen
+
+
+def compiler_options(preset: str) -> dict | None:
+    """The ``compiler_options`` of a program compiled for ``preset`` (a key of
+    :data:`PRESETS`), or ``None`` (XLA's defaults) with ``MOORJAX_XLA_TUNING=0``,
+    or ``MOORJAX_XLA_OPTIONS=0`` (these options alone, for an A/B), on a backend
+    other than the CPU (these are XLA:CPU's options) or once a jaxlib has
+    refused them. Starts JAX's backend: call it when compiling."""
+    import jax
+
+    if (_rejected or not wanted() or not _switched_on("MOORJAX_XLA_OPTIONS")
+            or jax.default_backend() != "cpu"):
+        return None
+    return dict(PRESETS[preset])
+
+
+def reject_options(exc: Exception) -> bool:
+    """Whether ``exc`` is XLA refusing an option of :data:`PRESETS` (an older or
+    newer jaxlib): if so, no program gets options from now on, and the caller
+    compiles again without them."""
+    if _rejected or "No such compile option" not in str(exc):
+        return False
+    _rejected.append(str(exc))
+    return True

@@ -1,12 +1,17 @@
-"""moorjax's XLA:CPU schedule flag (moorjax._xla_flags): added at import while
-JAX has not started, never over the user's choice, and it changes no result."""
+"""moorjax's XLA:CPU settings (moorjax._xla_flags): the schedule flag, added at
+import while JAX has not started, never over the user's choice, changes no
+result; the per-program compiler options are taken at the top level only, are
+dropped where XLA does not know them, and change results by rounding only."""
 
 import json
 import os
 import subprocess
 import sys
 
-from moorjax import _xla_flags
+import numpy as np
+import pytest
+
+from moorjax import _cache, _xla_flags
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FLAG = f"--{_xla_flags.FLAG}"
@@ -14,7 +19,8 @@ FLAG = f"--{_xla_flags.FLAG}"
 
 def _env(**extra):
     env = {k: v for k, v in os.environ.items()
-           if k not in ("XLA_FLAGS", "MOORJAX_XLA_TUNING", "PJRT_NPROC", "JAX_PLATFORMS")}
+           if k not in ("XLA_FLAGS", "MOORJAX_XLA_TUNING", "MOORJAX_XLA_OPTIONS", "PJRT_NPROC",
+                        "JAX_PLATFORMS")}
     env.update(PYTHONPATH=ROOT, MOORJAX_COMPILATION_CACHE="0", **extra)
     return env
 
@@ -71,12 +77,96 @@ def test_the_schedule_changes_no_number():
     """An implicit run of a moving catenary with and without the flag: the same
     steps and the same tensions to the last bit (the flag orders XLA's work, it
     does not change it)."""
-    code = _RUN.format(tests=os.path.join(ROOT, "tests"))
-    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=_env(MOORJAX_XLA_TUNING=v),
-                                      capture_output=True, text=True, check=True)
-                       .stdout.strip().splitlines()[-1]) for v in ("1", "0")]
+    # the per-program options (which MOORJAX_XLA_TUNING=0 also drops) held off in both
+    runs = [_small_run_in_a_process(MOORJAX_XLA_TUNING=v, MOORJAX_XLA_OPTIONS="0") for v in ("1", "0")]
     assert runs[0]["steps"] == runs[1]["steps"] > 0
     assert runs[0]["tension"] == runs[1]["tension"]
+
+
+def _small_run_in_a_process(**extra):
+    code = _RUN.format(tests=os.path.join(ROOT, "tests"))
+    out = subprocess.run([sys.executable, "-c", code], env=_env(**extra), capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_the_compiler_options_change_numbers_by_rounding_only():
+    """The same run compiled with moorjax's per-program options (the default)
+    and with XLA's defaults: the statics and the steps differ by rounding, so
+    the tensions agree to far below the run's tolerance (rtol 1e-5)."""
+    runs = [_small_run_in_a_process(MOORJAX_XLA_OPTIONS=v) for v in ("1", "0")]
+    a, b = (np.asarray(r["tension"]) for r in runs)
+    assert a.shape == b.shape and runs[0]["steps"] > 0
+    np.testing.assert_allclose(a, b, rtol=1e-7)
+
+
+def test_compiler_option_presets_and_their_switches(monkeypatch):
+    for name in ("MOORJAX_XLA_TUNING", "MOORJAX_XLA_OPTIONS"):
+        monkeypatch.delenv(name, raising=False)
+    assert _xla_flags.compiler_options("runs") == {"xla_cpu_use_fusion_emitters": False}
+    assert _xla_flags.compiler_options("once") == {"xla_cpu_use_fusion_emitters": False,
+                                                   "xla_backend_optimization_level": 0}
+    for name in ("MOORJAX_XLA_TUNING", "MOORJAX_XLA_OPTIONS"):
+        monkeypatch.setenv(name, "off")
+        assert _xla_flags.compiler_options("runs") is None
+        monkeypatch.delenv(name)
+
+
+def _spring():
+    import jax.numpy as jnp
+
+    seen = []  # the options a call would take, recorded while tracing
+
+    def force(k, x):
+        seen.append(program.compiler_options())
+        return -k * x
+
+    program = _cache.StoredProgram(force, compile_for="once")
+    return program, seen, jnp
+
+
+@pytest.mark.parametrize("stored", ["1", "0"])
+def test_a_program_takes_its_options_at_the_top_level_only(monkeypatch, tmp_path, stored):
+    """Called directly, a program compiles with its preset, stored on disk or
+    not; called under the caller's ``jit``, ``grad`` or ``vmap`` it is inlined
+    into the caller's program (a nested ``jit`` may not carry options)."""
+    import jax
+
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("MOORJAX_COMPILATION_CACHE", stored)
+    monkeypatch.delenv("MOORJAX_XLA_OPTIONS", raising=False)
+    monkeypatch.delenv("MOORJAX_XLA_TUNING", raising=False)
+    program, seen, jnp = _spring()
+    x = jnp.arange(3.0)
+    assert list(jax.device_get(program(jnp.asarray(2.0), x))) == [-0.0, -2.0, -4.0]
+    assert program.compiler_options() == _xla_flags.compiler_options("once")
+    assert float(jax.jit(lambda k: program(k, x).sum())(jnp.asarray(1.0))) == -3.0
+    assert float(jax.jit(lambda: program(jnp.asarray(1.0), x).sum())()) == -3.0  # constants only
+    assert float(jax.grad(lambda k: program(k, x).sum())(jnp.asarray(1.0))) == -3.0
+    assert jax.vmap(lambda k: program(k, x))(jnp.ones(2)).shape == (2, 3)
+    assert seen and all(s is None for s in seen)  # never asked for inside a trace
+
+
+def test_an_option_xla_does_not_know_is_dropped(monkeypatch, tmp_path):
+    """A jaxlib that does not know an option refuses the compile with an error
+    (an unknown flag in ``XLA_FLAGS`` would end the process): the call is made
+    again without options, and no program takes them from then on."""
+    import jax
+
+    monkeypatch.setattr(_cache, "TRUSTED", _cache.TRUSTED + (__name__.split(".")[0],))
+    monkeypatch.setenv("MOORJAX_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("MOORJAX_XLA_OPTIONS", raising=False)
+    monkeypatch.delenv("MOORJAX_XLA_TUNING", raising=False)
+    monkeypatch.setitem(_xla_flags.PRESETS, "once", (("xla_cpu_no_such_option", True),))
+    monkeypatch.setattr(_xla_flags, "_rejected", [])
+    program, _, jnp = _spring()
+    assert program.compiler_options() == {"xla_cpu_no_such_option": True}
+    assert list(jax.device_get(program(jnp.asarray(2.0), jnp.arange(3.0)))) == [-0.0, -2.0, -4.0]
+    assert _xla_flags._rejected and program.compiler_options() is None
+    # an error that is not about options is the caller's
+    with pytest.raises(TypeError):
+        program(jnp.asarray(2.0))
 
 
 def test_set_flag_keeps_or_replaces_a_value_and_the_other_flags():

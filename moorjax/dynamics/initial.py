@@ -19,6 +19,8 @@ state is where the iteration stopped).
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -156,7 +158,9 @@ def _stop_gradient(tree):
     return eqx.combine(jax.lax.stop_gradient(diff), static)
 
 
-@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
+# eqx.filter_jit, its program also stored on disk (moorjax._cache); compiled for
+# runs (moorjax._xla_flags.PRESETS): the bodies' Newton solves the lines many times
+@functools.partial(StoredProgram, compile_for="once")
 def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function

@@ -36,7 +36,7 @@ from .settings import default_output_times as default_output_times
 from .settings import plan as plan
 from .vector_field import pack
 
-_integrate = StoredProgram(integrate, storable=storable_run)
+_integrate = StoredProgram(integrate, storable=storable_run, compile_for="runs")
 
 
 def simulate(

@@ -19,6 +19,7 @@ MoorDyn; the analytic catenary does model it (``moorjax.statics.catenary``).
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import equinox as eqx
@@ -356,7 +357,9 @@ def element_core(line):
 METHODS = ("fem", "catenary", "auto")
 
 
-@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
+# eqx.filter_jit, its program also stored on disk (moorjax._cache) and compiled
+# for one run (moorjax._xla_flags.PRESETS)
+@functools.partial(StoredProgram, compile_for="once")
 def _exact_core(line, env, t, init, rtol, atol, max_steps, fallback):
     """The catenary statics; with ``fallback``, the finite-element solve where it fails."""
     from .exact import catenary_statics
@@ -399,7 +402,7 @@ def _implicit_jvp(primals, tangents):
     return r_free, r_dot
 
 
-@StoredProgram  # eqx.filter_jit, its program also stored on disk (moorjax._cache)
+@functools.partial(StoredProgram, compile_for="once")  # as _exact_core
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)

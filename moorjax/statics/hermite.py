@@ -16,6 +16,8 @@ element stiffness EA/h, so each residual reads in metres.
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.flatten_util
@@ -23,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 
+from .._cache import StoredProgram
 from .._numerics import safe_norm
 from ..element.hermite import (HermiteDofs, clamped_slopes, element_fields, element_lengths,
                                extensibility, generalized_forces, quadrature_weights, static_residual)
@@ -330,7 +333,9 @@ def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10
     return _assemble(line, ra, rb, (r, dr, dofs.lam))
 
 
-@eqx.filter_jit
+# eqx.filter_jit, its program also stored on disk (moorjax._cache) and compiled
+# for one run (moorjax._xla_flags.PRESETS), as the linear element's solve
+@functools.partial(StoredProgram, compile_for="once")
 def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
