@@ -22,7 +22,7 @@ from jaxtyping import Array
 
 from .._cache import host_checked_inputs
 from .adjoint import diffrax_adjoint
-from .vector_field import end_outputs, unpack, vector_field
+from .vector_field import end_outputs, traced_vector_field, unpack, vector_field
 
 
 class SimulationResult(eqx.Module):
@@ -100,7 +100,7 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     """
     s = settings
     with_nodes = s.save_nodes
-    term = diffrax.ODETerm(_counted_vector_field if count else vector_field)
+    term = diffrax.ODETerm(_counted_vector_field if count else traced_vector_field)
     if keep_final:
         saveat = diffrax.SaveAt(
             ts=s.ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)

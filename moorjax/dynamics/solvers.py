@@ -26,6 +26,7 @@ steps also measure each segment chord of a linear-element line
 from __future__ import annotations
 
 import diffrax
+import equinox as eqx
 
 from ..linalg.banded_solver import BlockTridiagonalSolver, SecondOrderBandSolver
 from .error_control import StateNorm
@@ -142,13 +143,16 @@ class _ByName:
     """A module-level function as a solver's static field, named by its import
     path: equal and hashed as the function, and printed without an object
     address, so that a stored program's key (``moorjax._cache``) is the same in
-    every process."""
+    every process. Called through ``eqx.filter_jit``: traced once per structure
+    of its arguments however often a step calls it (see
+    :data:`~moorjax.dynamics.vector_field.traced_vector_field`)."""
 
     def __init__(self, fn):
         self.fn = fn
+        self._traced = eqx.filter_jit(fn)
 
     def __call__(self, *args, **kwargs):
-        return self.fn(*args, **kwargs)
+        return self._traced(*args, **kwargs)
 
     def __eq__(self, other):
         return isinstance(other, _ByName) and other.fn is self.fn

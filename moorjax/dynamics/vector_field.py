@@ -103,6 +103,16 @@ def vector_field(t, y, scene):
     return out + rates
 
 
+#: :func:`vector_field` traced once per structure of its arguments. A solver
+#: evaluates the vector field several times per step (ROS34PW2: four stages, the
+#: time column, the end-of-step check, its ``init``; 14 traces of a case-A
+#: integration), and each plain call is traced anew; through ``filter_jit`` the
+#: later calls reuse the first trace. XLA inlines the calls, so the compiled
+#: program computes the same numbers (bit-identical on ``oc3_catenary``); a run's
+#: tracing took 2.3-2.7 -> 1.2-1.3 s (``benchmarks/README.md``, session 34).
+traced_vector_field = eqx.filter_jit(vector_field)
+
+
 def inertial_ends(scene) -> bool:
     """Whether some line on a body carries its end inertia (a consistent-mass
     element, see :mod:`moorjax.body.end_inertia`): then the bodies' and those
