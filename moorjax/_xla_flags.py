@@ -1,4 +1,5 @@
-"""XLA:CPU settings moorjax asks for before JAX starts its backend.
+"""XLA:CPU settings moorjax asks for: flags before JAX starts its backend, and
+per-program compiler options (:data:`PRESETS`, end of this module).
 
 A line's time step is a loop of a few hundred small operations (3×3 block
 products, band solves, Morison loads on ten to a hundred nodes); on a CPU, XLA
