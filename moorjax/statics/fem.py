@@ -109,23 +109,17 @@ def initial_guess(line: Line, env, t=0.0) -> LineState:
 
 
 def _residual(line, env, t):
-    """The static residual of the free nodes, ``fn(r_free, args)`` (args unused)."""
-
-    def fn(r_free, args):
-        del args
-        return _scaled_free_forces(line, env, t, r_free)
-
-    return fn
-
-
-@eqx.filter_jit  # traced once per line structure however often a solve evaluates it
-def _scaled_free_forces(line, env, t, r_free):
     # Forces are divided by the element's axial stiffness EA/l, so the residual is
     # a displacement [m] and one tolerance in metres serves steps and residuals.
     k = line.line_type.axial.nominal_ea() / line.segment_length
-    r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
-    force = line.element.nodal_forces(line, env, r, jnp.zeros_like(r))
-    return force[1:-1] / k
+
+    def fn(r_free, args):
+        del args
+        r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
+        force = line.element.nodal_forces(line, env, r, jnp.zeros_like(r))
+        return force[1:-1] / k
+
+    return fn
 
 
 def _force_scale(line, env, t):
