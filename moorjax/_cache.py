@@ -383,10 +383,7 @@ class StoredProgram:
 
             if self.compile_for is None or not reject_options(exc):
                 raise
-            for program in list(_INSTANCES):
-                program._programs.clear()
-                program._ahead.clear()
-                program._jitted.clear()
+            clear_programs()  # those compiled with the options
             return self(*args, **kwargs)
 
     def _run(self, found):
@@ -505,6 +502,7 @@ def clear_programs():
     for program in list(_INSTANCES):
         program._programs.clear()
         program._ahead.clear()
+        program._jitted.clear()
 
 
 def _specs(leaves, sharded=False) -> list:

@@ -134,7 +134,6 @@ def prefer_one_intra_op_thread() -> bool:
     return True
 
 
-
 #: Per-program XLA:CPU options (``jax.jit``'s ``compiler_options``) by what a
 #: program is compiled for. XLA:CPU's MLIR fusion emitters cost compile time and
 #: buy nothing measurable in moorjax's programs of small kernels: without them

@@ -158,8 +158,8 @@ def _stop_gradient(tree):
     return eqx.combine(jax.lax.stop_gradient(diff), static)
 
 
-# eqx.filter_jit, its program also stored on disk (moorjax._cache); compiled for
-# runs (moorjax._xla_flags.PRESETS): the bodies' Newton solves the lines many times
+# eqx.filter_jit, its program also stored on disk (moorjax._cache) and compiled
+# for one run per structure (moorjax._xla_flags.PRESETS), as the line statics
 @functools.partial(StoredProgram, compile_for="once")
 def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
