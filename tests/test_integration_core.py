@@ -142,3 +142,64 @@ def test_fixed_steps_retry_a_failed_newton_step():
     adaptive = simulate(scene, 6.0, init=init)
     tb, ta = np.asarray(fixed.tension_b[:, 0]), np.asarray(adaptive.tension_b[:, 0])
     assert np.sqrt(np.mean((tb - ta) ** 2)) < 0.01 * np.std(ta)
+
+
+# ------------------------------------------------------------------- outputs
+
+
+@pytest.mark.parametrize("bodies", [False, True])
+def test_outputs_after_the_loop_equal_those_in_the_loop(monkeypatch, bodies):
+    """A run whose saved states fit :data:`STATES_AFTER_LOOP` computes its outputs
+    after the time loop from the states at the output times; with the limit at 0
+    they come from inside the loop, as before session 35. Both give the same
+    end forces, node outputs, body motion and final state (to rounding), and the
+    same gradient of a fairlead tension with respect to a drag coefficient (the
+    line alone)."""
+    from moorjax.dynamics import integrate as core
+    from moorjax.dynamics import simulate
+    from scenes import case_b_scene
+
+    if bodies:
+        point = ConnectionPoint(2.0 * NODE_MASS, [-140.0, 0.0, -110.0], volume=NODE_MASS / 1025.0)
+        scene = series(point)
+    else:
+        scene = case_b_scene(n=6)
+    init = equilibrium_state(scene, 0.0).state
+
+    def run(save_nodes):
+        return simulate(scene, 4.0, init=init, dt_out=0.1, save_nodes=save_nodes)
+
+    from moorjax.dynamics.vector_field import pack
+
+    assert core.outputs_after_loop(pack(init), jnp.zeros(41))
+    after = run(True)
+    settings = mj.dynamics.plan(2.0, dt_out=0.1, scene=scene)
+
+    def mean_tension(cd):  # the identification's path: no final state, a gradient
+        sc = eqx.tree_at(lambda s: s.lines[0].line_type.drag.cd_normal, scene, cd)
+        return jnp.mean(core.integrate(sc, pack(init), settings, keep_final=False).tension_b)
+
+    cd = scene.lines[0].line_type.drag.cd_normal
+    if not bodies:  # (the body scene's gradient only adds compile time)
+        value_after, grad_after = jax.jit(jax.value_and_grad(mean_tension))(cd)
+    monkeypatch.setattr(core, "STATES_AFTER_LOOP", 0)
+    inside = run(True)
+    if not bodies:
+        value_inside, grad_inside = jax.jit(jax.value_and_grad(mean_tension))(cd)
+        assert float(value_after) == pytest.approx(float(value_inside), rel=1e-12)
+        assert float(grad_inside) != 0.0
+        assert float(grad_after) == pytest.approx(float(grad_inside), rel=1e-8)
+    assert int(after.num_steps) == int(inside.num_steps)
+    for name in ("tension_a", "tension_b", "force_a", "force_b", "body_pose", "body_velocity"):
+        a, b = getattr(after, name), getattr(inside, name)
+        if a is None:
+            assert b is None and not (bodies and name.startswith("body"))
+            continue
+        scale = max(float(np.max(np.abs(np.asarray(b)))), 1.0)
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=0, atol=1e-9 * scale)
+    for name in ("positions", "velocities", "segment_tensions"):
+        for a, b in zip(getattr(after, name), getattr(inside, name)):
+            scale = max(float(np.max(np.abs(np.asarray(b)))), 1.0)
+            np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=0, atol=1e-9 * scale)
+    for a, b in zip(jax.tree_util.tree_leaves(after.final_state), jax.tree_util.tree_leaves(inside.final_state)):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=0, atol=1e-9 * max(float(np.max(np.abs(b))), 1.0))

@@ -101,26 +101,34 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     s = settings
     with_nodes = s.save_nodes
     term = diffrax.ODETerm(_counted_vector_field if count else traced_vector_field)
-    if keep_final:
+    dt0 = None if isinstance(s.controller, diffrax.StepTo) else s.dt0
+    after = outputs_after_loop(y0, s.ts)
+    if after:  # the states at ts, their outputs after the loop (see outputs_after_loop)
+        subs = [diffrax.SubSaveAt(ts=s.ts)] + ([diffrax.SubSaveAt(t1=True)] if keep_final else [])
+        saveat = diffrax.SaveAt(subs=subs)
+    elif keep_final:
         saveat = diffrax.SaveAt(
             ts=s.ts, t1=True, fn=lambda t, y, args: (end_outputs(t, y, args, with_nodes), y)
         )
     else:
         saveat = diffrax.SaveAt(ts=s.ts, fn=lambda t, y, args: end_outputs(t, y, args, with_nodes))
-    dt0 = None if isinstance(s.controller, diffrax.StepTo) else s.dt0
     # plan() checked ts, t0 and dt0 on the host: diffrax's runtime checks of
     # them then compile without host callbacks (see moorjax._cache)
     checks = host_checked_inputs() if s.host_checked else contextlib.nullcontext()
     with checks:
         sol = _solve(term, s, dt0, y0, scene, saveat)
-    if keep_final:
-        outs, ys = sol.ys  # ts outputs, then the t1 (last reached) entry
-        cut = lambda a: a[:-1]  # noqa: E731
-        final = unpack(jax.tree_util.tree_map(lambda a: a[-1], ys), scene.lines)
-    else:
-        outs = sol.ys
+    if after:
+        outs = jax.vmap(lambda t, y: end_outputs(t, y, scene, with_nodes))(s.ts, sol.ys[0])
+        final_y = sol.ys[1] if keep_final else None
         cut = lambda a: a  # noqa: E731
-        final = None
+    elif keep_final:
+        outs, final_y = sol.ys  # ts outputs, then the t1 (last reached) entry
+        cut = lambda a: a[:-1]  # noqa: E731
+    else:
+        outs, final_y = sol.ys, None
+        cut = lambda a: a  # noqa: E731
+    final = None if final_y is None else unpack(jax.tree_util.tree_map(lambda a: a[-1], final_y),
+                                                scene.lines)
     return SimulationResult(
         ts=s.ts,
         tension_a=cut(outs["tension_a"]),
@@ -138,6 +146,28 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
         body_velocity=cut(outs["body_velocity"]) if "body_velocity" in outs else None,
         velocities=(tuple(cut(p) for p in outs["velocities"]) if with_nodes else None),
     )
+
+
+#: the most numbers of saved states (output times × state size) for which an
+#: integration saves its states and computes its outputs after the loop
+#: (:func:`outputs_after_loop`): 2²² float64, 32 MB
+STATES_AFTER_LOOP = 2 ** 22
+
+
+def outputs_after_loop(y0, ts) -> bool:
+    """Whether :func:`integrate` saves the states at its output times and computes
+    the outputs (:func:`~moorjax.dynamics.vector_field.end_outputs`) from them after
+    the time loop, in one call vectorised over the output times, instead of inside
+    the loop at every output time (structure only: shapes, decided at trace time).
+
+    Inside the loop diffrax compiles the outputs three times (at each output time
+    within a step, at the last time reached, and for a run with t0 = t1), and
+    evaluates them one output time at a time. After the loop they are compiled
+    once and vectorised; the price is memory for the states at every output time,
+    so runs whose saved states would exceed :data:`STATES_AFTER_LOOP` numbers keep
+    the outputs in the loop (``benchmarks/README.md``, session 35)."""
+    size = sum(int(np.prod(np.shape(x))) for x in jax.tree_util.tree_leaves(y0))
+    return int(np.shape(ts)[0]) * size <= STATES_AFTER_LOOP
 
 
 def storable_run(scene, y0, settings, *, count: bool = False, keep_final: bool = True) -> bool:
