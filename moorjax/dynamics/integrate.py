@@ -92,8 +92,9 @@ def integrate(scene, y0, settings, *, count: bool = False, keep_final: bool = Tr
     Args:
         count: count vector-field evaluations on the host (:data:`EVALUATIONS`).
         keep_final: also return the state at the last time reached
-            (``final_state``); without it only the end outputs are saved, which
-            is all a gradient needs.
+            (``final_state``); without it only what the end outputs need is
+            saved (the states at the output times, or the outputs themselves,
+            see :func:`outputs_after_loop`), which is all a gradient needs.
 
     Returns a :class:`SimulationResult`; never raises on a failed solve (the
     outputs after the failure are not finite: diffrax fills them with inf).
