@@ -1,6 +1,7 @@
 """The stage-state Newton test of the implicit methods (moorjax.dynamics.newton)."""
 
 import diffrax
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -47,6 +48,50 @@ def test_diffrax_passes_the_stage_layout():
     sol = _solve(diffrax.with_stepsize_controller_tols(Spy)())
     assert sol.result == diffrax.RESULTS.successful
     assert seen and all(s is not None and s[0] for s in seen)
+
+
+def test_explicit_start_is_the_identity_without_a_jacobian(monkeypatch):
+    """diffrax asks the root finder for an iteration matrix twice per step: before
+    its stage loop (for an ESDIRK method the explicit first stage's, zero
+    diagonal: the identity) and in its second stage (the step's own).
+    ``explicit_start`` tells them apart by diffrax's calling lambda; the first is
+    factored from the identity relation, without a derivative of the vector
+    field (a vector field with a sine: the sine appears in the step's program
+    once less), and gives what the old start (I − 0·J from the
+    relation) gave: the same run."""
+    from moorjax.dynamics import newton
+
+    calls = []
+
+    class Spy(StageChord):
+        def init(self, fn, y, args, options, f_struct, aux_struct, tags):
+            if "init_state" not in options:
+                calls.append(newton.explicit_start(fn))
+            return super().init(fn, y, args, options, f_struct, aux_struct, tags)
+
+    def vf(t, y, args):  # a stiff pendulum
+        r, v = y[:, :3], y[:, 3:]
+        return jnp.concatenate([v, -1e4 * jnp.sin(r) - 50.0 * v], axis=-1)
+
+    y0 = jnp.array([[1e-2, -2e-2, 3e-2, 0.0, 0.0, 0.0]])
+    solver = diffrax.Kvaerno5(root_finder=diffrax.with_stepsize_controller_tols(Spy)())
+
+    def run(y):
+        return diffrax.diffeqsolve(diffrax.ODETerm(vf), solver, 0.0, 0.5, 1e-3, y,
+                                   stepsize_controller=diffrax.PIDController(rtol=1e-6, atol=1e-8),
+                                   max_steps=100_000, throw=False)
+
+    new = run(y0)
+    sines_new = str(jax.make_jaxpr(lambda y: run(y).ys)(y0)).count(" sin ")
+    assert calls.count(True) >= 1 and calls.count(False) >= 1, calls
+    monkeypatch.setattr(newton, "explicit_start", lambda fn: False)  # the start from the relation
+    jax.clear_caches()  # diffrax's jitted loop traced anew
+    old = run(y0)
+    sines_old = str(jax.make_jaxpr(lambda y: run(y).ys)(y0)).count(" sin ")
+    assert 0 < sines_new < sines_old, (sines_new, sines_old)
+    assert new.result == old.result == diffrax.RESULTS.successful
+    assert int(new.stats["num_steps"]) == int(old.stats["num_steps"])
+    np.testing.assert_allclose(np.asarray(new.ys), np.asarray(old.ys), rtol=1e-12, atol=1e-15)
 
 
 def test_stage_chord_accuracy_matches_very_chord():

@@ -82,14 +82,24 @@ class StageChord(VeryChord):
     refresh_rate: float | None = eqx.field(static=True, default=None)
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
-        if not isinstance(self.linear_solver, StageFactorSolver) or "init_state" in options:
+        if "init_state" in options or stage_arguments(args) is None:
             return super().init(fn, y, args, options, f_struct, aux_struct, tags)
-        # diffrax's call at the linearisation point: the lines' own factors
-        # instead of a linearised operator for the solver to materialise
+        if isinstance(self.linear_solver, StageFactorSolver):
+            # the lines' own factors instead of a linearised operator for the
+            # solver to materialise
+            linear = self.linear_solver.stage_init(y, args)
+        else:
+            # diffrax's Jacobian of the explicit first stage (zero diagonal) is
+            # the identity: factor that, without differentiating the vector field
+            relation = _identity_relation if explicit_start(fn) else _NoAux(fn)
+            operator = lx.linearise(lx.JacobianLinearOperator(relation, y, args, tags=tags))
+            linear = self.linear_solver.init(operator, options={})
         dtype = jnp.result_type(*jax.tree_util.tree_leaves(y))
+        # one layout for both of diffrax's calls (they meet in a ``lax.cond``): the
+        # solvers here work from their factors alone, the operator is a placeholder
         return _VeryChordState(
             linear_state=(lx.FunctionLinearOperator(_identity, jax.eval_shape(lambda: y)),
-                          lax.stop_gradient(self.linear_solver.stage_init(y, args))),
+                          lax.stop_gradient(linear)),
             diff=jax.tree_util.tree_map(lambda a: jnp.full(a.shape, jnp.inf, a.dtype), y),
             diffsize=jnp.array(jnp.inf, dtype=dtype),
             diffsize_prev=jnp.array(1.0, dtype=dtype),
@@ -132,6 +142,38 @@ class StageChord(VeryChord):
             step=state.step + 1,
         )
         return new_y, new_state, aux
+
+
+def explicit_start(fn) -> bool:
+    """Whether diffrax asks for the iteration matrix it builds before its stage
+    loop (``fn`` the stage relation of that call, a lambda of
+    ``AbstractRungeKutta.step``; the one inside the loop is a lambda of its
+    ``eval_f_jac``): for the ESDIRK methods (Kvaerno) the Jacobian of the
+    explicit first stage, whose diagonal is zero, so the matrix is the identity.
+    It serves only the first stage of a first step (or after a jump); diffrax
+    builds the step's own matrix in its second stage. Formed from the relation
+    itself, it cost a Jacobian of the vector field in every step, and a copy of
+    that Jacobian in the compiled program (``benchmarks/README.md``, session
+    35). ``tests/test_speed_newton.py`` pins diffrax's two calls."""
+    return getattr(fn, "__qualname__", "") == "AbstractRungeKutta.step.<locals>.<lambda>"
+
+
+def linearisation_evaluations(solver) -> int:
+    """Vector-field evaluations per step of an implicit diffrax ``solver`` that
+    are not Newton iterations (what ``simulate(count_newton=True)`` subtracts):
+    the linearisation point of the step's iteration matrix (one); none where the
+    lines factor their own stage matrix (:class:`StageFactorSolver`, from the
+    elements' forces); diffrax's own chord also differentiates the relation of
+    the explicit first stage (two; see :func:`explicit_start`)."""
+    finder = getattr(solver, "root_finder", None)
+    if isinstance(finder, StageChord):
+        return 0 if isinstance(finder.linear_solver, StageFactorSolver) else 1
+    return 2
+
+
+def _identity_relation(y, args):
+    del args
+    return y
 
 
 class _NoAux(eqx.Module):

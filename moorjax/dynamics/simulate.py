@@ -29,6 +29,7 @@ from .initial import (catenary_state, check_geometry, equilibrium_state, failed_
 from .integrate import SimulationResult as SimulationResult
 from .._cache import StoredProgram
 from .integrate import EVALUATIONS, failure_cause, integrate, is_implicit_solver, storable_run
+from .newton import linearisation_evaluations
 from .settings import Plan as Plan
 from .settings import Settings as Settings
 from .settings import check_time_span as check_time_span
@@ -129,10 +130,11 @@ def simulate(
             ensembles). Under ``jit``/``vmap`` use ``throw=False``.
         count_newton: count vector-field evaluations and Newton iterations
             (a diagnostic: a host callback per evaluation slows the run). For
-            the implicit methods each step costs one evaluation at its start
-            (the explicit first stage; implicit Euler's error estimate) and one
-            for the Jacobian's linearisation point; every other evaluation is
-            a Newton iteration.
+            the implicit methods each step costs one evaluation at the
+            Jacobian's linearisation point (none where the lines' elements
+            factor their own stage matrix, two with diffrax's own chord,
+            :func:`~moorjax.dynamics.newton.linearisation_evaluations`); every
+            other evaluation is a Newton iteration.
     """
     p = plan(
         duration, ts=ts, dt_out=dt_out, t0=t0, solver=solver, rtol=rtol, atol=atol,
@@ -162,7 +164,8 @@ def simulate(
         jax.block_until_ready(res.tension_b)
         evals = EVALUATIONS[0]
         steps = int(res.num_steps)
-        newton = evals - 2 * steps if is_implicit_solver(p.solver) else 0
+        implicit = is_implicit_solver(p.solver)
+        newton = evals - linearisation_evaluations(p.solver) * steps if implicit else 0
         res = eqx.tree_at(
             lambda r: (r.num_newton_iterations, r.num_evaluations), res,
             (jnp.asarray(newton), jnp.asarray(evals)), is_leaf=lambda x: x is None,
