@@ -417,8 +417,6 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         session 35)."""
         tab = self.tableau
         s = len(tab.alpha)
-        first = self._solve(lu, jtu.tree_map(lambda a, b: c * (a + tab.gamma_sum[0] * h * b), f0, f_t))
-        stacked = jtu.tree_map(lambda x: jnp.zeros((s,) + x.shape, x.dtype).at[0].set(x), first)
         dtype = jnp.result_type(h)
         a_t = jnp.asarray(tab.a_t, dtype)
         c_t = jnp.asarray(tab.c_t, dtype)
@@ -428,14 +426,16 @@ class RosenbrockW(diffrax.AbstractAdaptiveSolver):
         def weighted(row, us):  # Σⱼ rowⱼ·uⱼ (rows of the strictly lower part: zeros from i on)
             return jtu.tree_map(lambda x: jnp.sum(row.reshape((s,) + (1,) * (x.ndim - 1)) * x, axis=0), us)
 
-        def stage(i, us):
-            y_i = jtu.tree_map(jnp.add, y0, weighted(a_t[i], us))
-            f_i = terms.vf(t0 + alpha[i] * h, y_i, args)
+        def solved(i, f_i, us):  # uᵢ into its row of us, from f at the stage
             rhs = jtu.tree_map(lambda f, ft, cu: c * (f + gamma_sum[i] * h * ft + cu / h),
                                f_i, f_t, weighted(c_t[i], us))
-            u_i = self._solve(lu, rhs)
-            return jtu.tree_map(lambda x, v: x.at[i].set(v), us, u_i)
+            return jtu.tree_map(lambda x, v: x.at[i].set(v), us, self._solve(lu, rhs))
 
+        def stage(i, us):
+            y_i = jtu.tree_map(jnp.add, y0, weighted(a_t[i], us))
+            return solved(i, terms.vf(t0 + alpha[i] * h, y_i, args), us)
+
+        stacked = solved(0, f0, jtu.tree_map(lambda x: jnp.zeros((s,) + x.shape, x.dtype), y0))
         stacked = lax.fori_loop(1, s, stage, stacked)
         return [jtu.tree_map(lambda x: x[i], stacked) for i in range(s)]
 
