@@ -126,10 +126,14 @@ def _residual(HF, VF, p, seabed):
 
 
 def _jac(fun, u0, u1):
-    """Values and 2x2 Jacobian (elementwise over batch) of fun(u0, u1) -> (f0, f1)."""
+    """Values and 2x2 Jacobian (elementwise over batch) of fun(u0, u1) -> (f0, f1).
+
+    One evaluation of ``fun`` and one (batched) of its linearisation for both
+    columns: a compiled program with a single copy of each (two ``jvp`` calls
+    would hold the function twice and its tangent twice)."""
+    f, lin = jax.linearize(fun, u0, u1)
     one, zero = jnp.ones_like(u0), jnp.zeros_like(u0)
-    f, (j00, j10) = jax.jvp(fun, (u0, u1), (one, zero))
-    _, (j01, j11) = jax.jvp(fun, (u0, u1), (zero, one))
+    (j00, j01), (j10, j11) = jax.vmap(lin, out_axes=0)(jnp.stack([one, zero]), jnp.stack([zero, one]))
     return f, (j00, j01, j10, j11)
 
 
