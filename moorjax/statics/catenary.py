@@ -347,6 +347,12 @@ def catenary_line_forces(r_a, r_b, L, EA, W, CB=0.0, seabed=True, **kwargs):
 def catenary_nodes(sol: CatenarySolution, r_a, r_b, s):
     """Points (len(s), 3) [m] of one line at unstretched arc length s [m] measured from end A."""
     lo, e, _, _, swap = _frame(r_a, r_b)
+    return nodes_in_frame(sol, lo, e, swap, s)
+
+
+def nodes_in_frame(sol: CatenarySolution, lo, e, swap, s):
+    """:func:`catenary_nodes` in the frame ``_frame(r_a, r_b)`` already gives
+    (its lower end, horizontal unit vector and swap flag)."""
     s = jnp.asarray(s, float)
     x, z, _ = catenary_profile(sol, jnp.where(swap, sol.L - s, s))
     return lo + x[..., None] * e + z[..., None] * jnp.array([0.0, 0.0, 1.0])

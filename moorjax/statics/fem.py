@@ -80,7 +80,7 @@ class LineStatics(eqx.Module):
 
 def _catenary_guess(line: Line, env, t):
     """Free-node positions from the analytic elastic catenary (no friction)."""
-    from .catenary import catenary_line_forces, catenary_nodes
+    from .catenary import _frame, nodes_in_frame, solve_catenary
 
     lt = line.line_type
     ra, rb = line.end_a.position(t), line.end_b.position(t)
@@ -89,9 +89,10 @@ def _catenary_guess(line: Line, env, t):
     # the analytic touchdown model needs the lower end on the seabed; a line whose
     # ends are both above it starts from the free catenary, lifted onto the bed
     touchdown = env.seabed is not None and jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
-    sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=touchdown)
+    lo, e, xf, zf, swap = _frame(ra, rb)  # once: a program compiled without XLA's passes
+    sol = solve_catenary(xf, zf, line.length, ea, w, 0.0, seabed=touchdown)  # keeps both copies
     s = line.segment_length * jnp.arange(1, line.n_segments)
-    nodes = catenary_nodes(sol, ra, rb, s)
+    nodes = nodes_in_frame(sol, lo, e, swap, s)
     ok = sol.converged & jnp.all(jnp.isfinite(nodes))
     nodes = jnp.where(ok, nodes, line.straight_state(t).r)
     if env.seabed is not None:
