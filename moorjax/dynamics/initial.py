@@ -33,7 +33,7 @@ from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
 from ..statics.fem import solve_line_statics
-from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces,
+from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces, line_starts,
                               STALLS, imbalance_report, line_statics_at, mooring_wrench,
                               newton_step, stalled, sunk_bodies)
 
@@ -165,22 +165,41 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function
     theorem at the solution (see the end)."""
-    poses, inits, converged, jac = _body_newton(_stop_gradient(scene_d), jax.lax.stop_gradient(t),
-                                                loads, tol, max_iterations)
-    # dη/dθ = −J⁻¹ ∂G/∂θ at the solution G(η, θ) = 0: a Newton step whose value
-    # is exactly zero but whose derivative is that (J is the iteration's last
-    # Jacobian, at the solution; its own derivative does not enter since G = 0)
-    nb = len(scene_d.bodies)
-    wrench = mooring_wrench(scene_d, poses, t, inits)
-    g = body_forces(scene_d, poses, t, loads) + wrench
-    delta = -jnp.linalg.solve(jac, g.ravel()).reshape(nb, 6)
-    tangent = delta - jax.lax.stop_gradient(delta)
-    poses = poses + jnp.where(jnp.isfinite(tangent), tangent, 0.0)
+    poses, inits, converged, jac, g, wrench = _body_newton(
+        _stop_gradient(scene_d), jax.lax.stop_gradient(t), loads, tol, max_iterations)
+    # the imbalance and the lines' wrench at the poses come from the iteration;
+    # the poses' derivative from the implicit function theorem, traced only where
+    # a derivative is taken (_implicit_poses)
+    poses = _implicit_poses(poses, jac, scene_d, t, loads, inits)
     st = line_statics_at(scene_d, poses, t, inits)
     lines_ok = jnp.stack([s.converged for s in st])
     state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
     return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses,
                        jax.lax.stop_gradient(g), jax.lax.stop_gradient(wrench))
+
+
+@eqx.filter_custom_jvp
+def _implicit_poses(poses, jac, scene, t, loads, inits):
+    """``poses``, the bodies' equilibrium G(η, θ) = 0 of ``scene`` (θ: its
+    arrays, and t), with the derivative dη/dθ = −J⁻¹ ∂G/∂θ·θ̇ attached (J = ``jac``,
+    the iteration's last Jacobian, at the solution; its own derivative does not
+    enter since G = 0). The rule evaluates the lines' wrench only under
+    differentiation: a run's start program holds no copy of the lines' statics
+    for it (compiled without XLA's passes, every copy is compiled)."""
+    return poses
+
+
+@_implicit_poses.def_jvp
+def _implicit_poses_jvp(primals, tangents):
+    poses, jac, scene, t, loads, inits = primals
+    _, _, t_scene, t_t, _, _ = tangents
+
+    def imbalance(sc, tt):
+        return body_forces(sc, poses, tt, loads) + mooring_wrench(sc, poses, tt, inits)
+
+    _, g_dot = eqx.filter_jvp(imbalance, (scene, t), (t_scene, t_t))
+    dot = -jnp.linalg.solve(jac, g_dot.ravel()).reshape(poses.shape)
+    return poses, jnp.where(jnp.isfinite(dot), dot, 0.0)
 
 
 def _body_newton(scene, t, loads, tol, max_iterations):
@@ -191,7 +210,8 @@ def _body_newton(scene, t, loads, tol, max_iterations):
     trial pose: accepted trials become the base of the next Newton step, rejected
     ones halve the step. One traced copy of the warm line statics keeps the
     compile small (XLA inlines every copy). Returns (poses, line states,
-    converged, Jacobian at the poses)."""
+    converged, Jacobian at the poses, and the imbalance and the lines' wrench
+    there)."""
     nb = len(scene.bodies)
     n_dof = 6 * nb
     eye = jnp.eye(n_dof).reshape((n_dof,) + (nb, 6))
@@ -201,20 +221,21 @@ def _body_newton(scene, t, loads, tol, max_iterations):
             st = line_statics_at(scene, p, t, inits)
             ends = [(s.force_a, s.force_b) for s in st]
             w = jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))
-            return body_forces(scene, p, t, loads) + w, st
+            return body_forces(scene, p, t, loads) + w, (st, w)
 
-        g, jvp_fn, st = jax.linearize(imbalance, poses, has_aux=True)
+        g, jvp_fn, (st, w) = jax.linearize(imbalance, poses, has_aux=True)
         jac = jax.vmap(jvp_fn)(eye).reshape(n_dof, n_dof).T
         ok = jnp.all(jnp.stack([s.converged for s in st]))
         tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
-        return g, jac, _states(st), ok, tens, st
+        return g, jac, _states(st), ok, tens, st, w
 
     poses0 = jnp.zeros((nb, 6))
-    inits0 = _states(line_statics_at(scene, poses0, t, (None,) * len(scene.lines)))
+    inits0 = line_starts(scene, poses0, t)  # the first trial solves from here
 
     def iteration(c):
-        (k, newton_its, trial, base, inits, size, jac, step, scale, _, _, stalls) = c
-        g, jac_t, states, ok, tens, sts = evaluate(trial, inits)
+        (k, newton_its, trial, base, inits, size, jac, step, scale, _, _, stalls, g_base,
+         w_base) = c
+        g, jac_t, states, ok, tens, sts, w = evaluate(trial, inits)
         finite = jnp.all(jnp.isfinite(g))  # (a non-finite J gets newton_step's regularised step)
         size_t = jnp.max(jnp.abs(g))
         first = newton_its == 0
@@ -230,6 +251,8 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         inits = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), states, inits)
         size = jnp.where(accept, size_t, size)
         jac = jnp.where(accept, jac_t, jac)
+        keep = accept | first  # (the first trial is the base, accepted or not)
+        g_base, w_base = jnp.where(keep, g, g_base), jnp.where(keep, w, w_base)
         converged = accept & (size_t < tol * scale)
         step = jnp.where(accept, newton_step(jac, jnp.where(finite, g, 0.0)), 0.5 * step)
         k = jnp.where(accept, 0, k + 1)
@@ -238,14 +261,15 @@ def _body_newton(scene, t, loads, tol, max_iterations):
                    | (stalls >= STALLS))
         newton_its = newton_its + accept
         return (k, newton_its, base + step, base, inits, size, jac, step, scale,
-                converged | gave_up, converged, stalls)
+                converged | gave_up, converged, stalls, g_base, w_base)
 
     zero = jnp.zeros((nb, 6))
     c0 = (0, 0, poses0, poses0, inits0, jnp.inf, jnp.eye(n_dof), zero, 1.0,
-          jnp.asarray(False), jnp.asarray(False), 0)
+          jnp.asarray(False), jnp.asarray(False), 0, jnp.full((nb, 6), jnp.nan),
+          jnp.full((nb, 6), jnp.nan))
     c = lax.while_loop(lambda c: (c[1] <= max_iterations) & ~c[9], iteration, c0)
-    _, _, _, poses, inits, _, jac, _, _, _, converged, _ = c
-    return poses, inits, converged, jac
+    _, _, _, poses, inits, _, jac, _, _, _, converged, _, g, w = c
+    return poses, inits, converged, jac, g, w
 
 
 def failed_lines(scene, eq: Equilibrium) -> list[str]:

@@ -28,7 +28,8 @@ from ..body.coupling import attach, mooring_wrenches
 from ..body.point import ConnectionPoint
 from ..model.grouping import map_lines
 from .exact import catenary_eligible, catenary_solves
-from .fem import ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, check_geometry, element_core
+from .fem import (ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, _solve_core, check_geometry,
+                  element_core, initial_guess)
 
 
 class SystemStatics(eqx.Module):
@@ -86,6 +87,22 @@ def line_statics_at(scene, poses, t, inits=None, methods=None):
     # lines of one structure (and method) solve as one vmapped call: one traced
     # copy of the solve per structure, not per line (moorjax.model.grouping)
     return map_lines(one, lines, inits, methods)
+
+
+def line_starts(scene, poses, t):
+    """Each line's start for a static solve with its fairleads where ``poses``
+    put them: what the solve would start from without one. For node elements
+    that is the catenary guess (:func:`~moorjax.statics.fem.initial_guess`), so a
+    program that solves warm from here holds no second (cold) copy of the solve;
+    other elements (Hermite) start from their own solve's answer."""
+    t = as_float(t)
+
+    def one(ln):
+        if element_core(ln) is _solve_core:
+            return initial_guess(ln, scene.env, t)
+        return element_core(ln)(ln, scene.env, t, None, RTOL, ATOL, MAX_STEPS).state()
+
+    return map_lines(one, _attached(scene, poses))
 
 
 def mooring_wrench(scene, poses, t=0.0, inits=None, methods=None) -> Array:
