@@ -198,8 +198,11 @@ def _implicit_poses_jvp(primals, tangents):
         return body_forces(sc, poses, tt, loads) + mooring_wrench(sc, poses, tt, inits)
 
     _, g_dot = eqx.filter_jvp(imbalance, (scene, t), (t_scene, t_t))
-    dot = -jnp.linalg.solve(jac, g_dot.ravel()).reshape(poses.shape)
-    return poses, jnp.where(jnp.isfinite(dot), dot, 0.0)
+    # linear in the tangent (reverse mode transposes it): J⁻¹ formed from the
+    # primal, its non-finite entries (a singular J) zeroed
+    inv = jnp.linalg.solve(jac, jnp.eye(jac.shape[0]))
+    inv = jnp.where(jnp.isfinite(inv), inv, 0.0)
+    return poses, -(inv @ g_dot.ravel()).reshape(poses.shape)
 
 
 def _body_newton(scene, t, loads, tol, max_iterations):
