@@ -9,7 +9,8 @@ Measured on these draws at 10 elements:
 - from the flat catenary with plain Newton (before), 16 of 200 failed (14
   grounded); now 2 fail, both grounded lines whose touchdown is far sharper
   than an element (draw 47: catenary parameter H/w = 0.017 element lengths;
-  draw 188: 1.25, which converges at 8, 12, 16 and 20 elements);
+  draw 188: 1.25, which converges at 8, 12, 16 and 20 elements; since
+  session 37 draw 188 converges too, see below);
 - lines that do not rest on the bed (MoorPy's grounded length 0: suspended,
   taut, near-straight and floating lines, and lines leaving an anchor on the
   bed upwards; 102 of them) all converge, worst end-tension error 1.1e-6 of
@@ -51,6 +52,21 @@ Intel one) the 7 are 2.7e-5, 6.2e-4, 7.7e-4, 1.1e-5, 2.05e-3 (H/w 0.022
 elements), 3.9e-4 and 9.4e-6, so the bound for them is 2.5e-3, and three of
 them (not two) are above 5e-4; the 91 resolved
 lines are unchanged (worst 4.8e-4, median 1.0e-4).
+
+Session 37: a grounded line that does not converge from the linear
+equilibrium at 2 segments per element is solved again from 8 (a graded mesh:
+from 8, then 2; ``GUESS_SEGMENTS`` in ``moorjax/statics/hermite.py``), and
+optimistix's Newton after the damped one keeps the damped iterate where it
+would raise the imbalance. Equal elements: only draw 47 fails (its imbalance
+3.9e4 N instead of 1e15); draw 108 no longer lands on the root it did (253 N at
+the grounded end for MoorPy's 5797 N) but converges again, as sharp touchdowns
+do at equal elements, far off (equal elements do not resolve it: graded, 6e-3).
+Graded: the sharper touchdowns' errors are 8.4e-6 … 6.2e-4 of the largest
+tension (draws 90 and 108: 2.9e-5 and 2.5e-4, from 1.1e-3 and 2.1e-3, which
+converged or diverged with the rounding of the linear solve that started them);
+against their own value the 7 warned lines are within 1.3e-2 (was 26 %), the
+91 others within 1.1e-3. The same figures with the linear statics of session
+36's reverted change (a different rounding of the start).
 
 Until session 18 the first touchdown came from equal Hermite elements only:
 draws 47 and 188 failed with every mesh, and on draws 90 and 108 equal
@@ -152,8 +168,8 @@ def test_touchdown_mesh_warns_exactly_where_the_touchdown_is_unresolved(graded):
     """``touchdown_mesh`` warns for the grounded lines whose touchdown bends within
     SHARP of an element (H/w from MoorPy's horizontal pull) and for no other; the
     lines it does not warn for get both end tensions, the grounded one included,
-    within 2e-3 of their own value (the warned ones: up to 26 % off at the
-    grounded end, see the module notes)."""
+    within 2e-3 of their own value, the warned ones within 5e-2 (measured
+    1.3e-2, see the module notes)."""
     warned = [warn for _, _, _, warn in graded]
     expected = [not _gentle(c) for c, _, _, _ in graded]
     assert sum(expected) >= 5 and warned == expected, [i for i, (a, b) in enumerate(zip(warned, expected)) if a != b]
@@ -162,6 +178,7 @@ def test_touchdown_mesh_warns_exactly_where_the_touchdown_is_unresolved(graded):
     print(f"\nend tensions against their own value: {len(own)} lines without the warning, worst "
           f"{own.max():.2e}, median {np.median(own):.2e}; {len(sharp)} warned, worst {sharp.max():.2e}")
     assert own.max() < 2e-3, own.max()
+    assert sharp.max() < 0.05, sharp  # measured 1.3e-2 (26 % before session 37's second start)
 
 
 #: H/w, in element lengths, below which a touchdown is sharper than 10 graded
@@ -195,9 +212,15 @@ def test_grounded_lines_with_a_gentle_touchdown_converge(solved):
     assert worst < 5e-3, worst
 
 
-def test_all_but_two_drawn_lines_converge(solved):
+def test_all_but_one_drawn_line_converge(solved):
+    """At 10 equal elements every drawn line but draw 47 (a grounded line whose
+    touchdown bends within 0.017 of an element) converges, and a failure is a
+    finite imbalance, not a run-off Newton's (1e15 N before session 37)."""
     failed = [(i, c["regime"]) for i, (c, st, _) in enumerate(solved) if not bool(st.converged)]
-    assert len(failed) <= 2 and all(regime == "grounded" for _, regime in failed), failed
+    assert len(failed) <= 1 and all(regime == "grounded" for _, regime in failed), failed
+    worst = max(float(st.max_residual) / max(float(st.tension_a), float(st.tension_b))
+                for c, st, _ in solved if not bool(st.converged)) if failed else 0.0
+    assert worst < 1.0, worst
 
 
 def test_grounded_lines_beat_the_linear_element_per_element(solved):
