@@ -126,10 +126,14 @@ def _residual(HF, VF, p, seabed):
 
 
 def _jac(fun, u0, u1):
-    """Values and 2x2 Jacobian (elementwise over batch) of fun(u0, u1) -> (f0, f1)."""
+    """Values and 2x2 Jacobian (elementwise over batch) of fun(u0, u1) -> (f0, f1).
+
+    One evaluation of ``fun`` and one (batched) of its linearisation for both
+    columns: a compiled program with a single copy of each (two ``jvp`` calls
+    would hold the function twice and its tangent twice)."""
+    f, lin = jax.linearize(fun, u0, u1)
     one, zero = jnp.ones_like(u0), jnp.zeros_like(u0)
-    f, (j00, j10) = jax.jvp(fun, (u0, u1), (one, zero))
-    _, (j01, j11) = jax.jvp(fun, (u0, u1), (zero, one))
+    (j00, j01), (j10, j11) = jax.vmap(lin, out_axes=0)(jnp.stack([one, zero]), jnp.stack([zero, one]))
     return f, (j00, j01, j10, j11)
 
 
@@ -343,6 +347,12 @@ def catenary_line_forces(r_a, r_b, L, EA, W, CB=0.0, seabed=True, **kwargs):
 def catenary_nodes(sol: CatenarySolution, r_a, r_b, s):
     """Points (len(s), 3) [m] of one line at unstretched arc length s [m] measured from end A."""
     lo, e, _, _, swap = _frame(r_a, r_b)
+    return nodes_in_frame(sol, lo, e, swap, s)
+
+
+def nodes_in_frame(sol: CatenarySolution, lo, e, swap, s):
+    """:func:`catenary_nodes` in the frame ``_frame(r_a, r_b)`` already gives
+    (its lower end, horizontal unit vector and swap flag)."""
     s = jnp.asarray(s, float)
     x, z, _ = catenary_profile(sol, jnp.where(swap, sol.L - s, s))
     return lo + x[..., None] * e + z[..., None] * jnp.array([0.0, 0.0, 1.0])

@@ -8,8 +8,9 @@ bed lifted to their resting penetration; the chord when no catenary exists).
 Without a current these forces are minus the gradient of a convex energy, so a
 regularised Newton iteration with a line search on that energy converges from
 any start, through touchdown and slack kinks (``_descent``). Its Jacobian is
-assembled from 9 coloured JVPs and solved block-tridiagonally (O(n)). A final
-optimistix Newton polishes the root; gradients are attached to the answer by
+assembled from 9 coloured JVPs and solved block-tridiagonally (O(n)). Near the
+root its steps are Newton's, and it ends with one of them past the tolerance
+(the polish: quadratic convergence); gradients are attached to the answer by
 the implicit function theorem (``_implicit``, a minimum-norm solve where the
 shape is undetermined), never through unrolled iterations.
 
@@ -28,13 +29,12 @@ import jax.lax as lax
 import jax.numpy as jnp
 import lineax as lx
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array
 
 from .._cache import StoredProgram
 from .._numerics import as_float, safe_norm
 from ..linalg import block_tridiagonal as btd
-from ..linalg.banded_solver import BlockTridiagonalSolver, band_of
+from ..linalg.banded_solver import band_of
 from ..linalg.undetermined import MinimumNorm
 from ..model.ends import FixedEnd
 from ..model.line import Line, LineState
@@ -80,7 +80,7 @@ class LineStatics(eqx.Module):
 
 def _catenary_guess(line: Line, env, t):
     """Free-node positions from the analytic elastic catenary (no friction)."""
-    from .catenary import catenary_line_forces, catenary_nodes
+    from .catenary import _frame, nodes_in_frame, solve_catenary
 
     lt = line.line_type
     ra, rb = line.end_a.position(t), line.end_b.position(t)
@@ -89,9 +89,10 @@ def _catenary_guess(line: Line, env, t):
     # the analytic touchdown model needs the lower end on the seabed; a line whose
     # ends are both above it starts from the free catenary, lifted onto the bed
     touchdown = env.seabed is not None and jnp.minimum(ra[2], rb[2]) <= -env.depth * (1.0 - 1e-6)
-    sol, _, _ = catenary_line_forces(ra, rb, line.length, ea, w, 0.0, seabed=touchdown)
+    lo, e, xf, zf, swap = _frame(ra, rb)  # once: a program compiled without XLA's passes
+    sol = solve_catenary(xf, zf, line.length, ea, w, 0.0, seabed=touchdown)  # keeps both copies
     s = line.segment_length * jnp.arange(1, line.n_segments)
-    nodes = catenary_nodes(sol, ra, rb, s)
+    nodes = nodes_in_frame(sol, lo, e, swap, s)
     ok = sol.converged & jnp.all(jnp.isfinite(nodes))
     nodes = jnp.where(ok, nodes, line.straight_state(t).r)
     if env.seabed is not None:
@@ -152,7 +153,7 @@ def _dense_step(fn, y, fy, mu):
     return jnp.linalg.solve(mu * jnp.eye(m) - jac, fy.reshape(-1)).reshape(y.shape)
 
 
-def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None):
+def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None, small=None):
     """Regularised Newton with an exact line search on the static energy.
 
     Without a current the static forces are the negative gradient of a convex
@@ -164,7 +165,16 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None)
     and the step length is where the energy stops decreasing along Δy: the sign
     change of g(α) = −f(y + αΔy)·Δy, bracketed on α = 1, ½, … (vmapped) and
     interpolated. Touchdown and slack kinks only make g piecewise smooth, so the
-    iteration cannot stall on them. Stops when max|f| ≤ tol(y). Returns (y, iterations).
+    iteration cannot stall on them. Returns (y, iterations).
+
+    Stops when max|f| ≤ tol(y). With ``small`` (a test of a step Δy and the
+    iterate it led to) it stops there only if the step that got there was
+    small, else takes one more step, the polish: near the root μ → 0 and the
+    step is Newton's, taken in full (quadratic convergence) where that does not
+    raise the imbalance, and kept only if it stays within tol. A separate
+    Newton solve would add the same; a step in a direction the forces do not
+    determine (a singular J: a slack weightless line piled on the bed) is not
+    repeated for ever.
 
     ``restart`` (a start like ``y0``, or None): where ``y0`` has not converged in
     half the steps, the rest start from it. A warm start (a neighbouring
@@ -175,22 +185,27 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None)
     guess).
     """
     def cond(c):
-        _, _, it, done = c
+        it, done = c[3], c[4]
         return (it < max_steps) & jnp.invert(done)
 
     if restart is not None:
-        f_restart = fn(restart, None)  # once, not per step (a cond on a vmapped count runs both sides)
+        # once, not per step (a cond on a vmapped count runs both sides)
+        f_restart, tol_restart = fn(restart, None), tol(restart)
 
     def body(c):
-        y, fy, it, _ = c
+        # tol(y) is carried: the force scale it needs is computed once per iterate
+        y, fy, tol_y, it, _, within_before = c
         if restart is not None:
             now = it == max_steps // 2
             y, fy = jnp.where(now, restart, y), jnp.where(now, f_restart, fy)
+            tol_y = jnp.where(now, tol_restart, tol_y)
+            within_before = within_before & jnp.invert(now)
         mu = jnp.max(jnp.abs(fy)) / soft_length
         dy = step(fn, y, fy, mu)
         dy = jnp.where(jnp.all(jnp.isfinite(dy)), dy, fy)  # a failed solve: relax along f
         alphas = jnp.asarray(_ALPHAS)
-        g = jax.vmap(lambda a: -jnp.sum(fn(y + a * dy, None) * dy))(alphas)
+        f_trial = jax.vmap(lambda a: fn(y + a * dy, None))(alphas)
+        g = -jnp.sum(f_trial * dy, axis=tuple(range(1, f_trial.ndim)))
         g = jnp.where(jnp.isfinite(g), g, jnp.inf)
         down = g <= 0.0  # the energy still decreases at α
         k = jnp.argmax(down)  # the largest such α (α decreases with k)
@@ -202,17 +217,31 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None)
         # sign change of g between a_lo (g <= 0) and a_hi (g > 0)
         frac = jnp.where(jnp.isfinite(g_hi) & (g_hi > g_lo), -g_lo / (g_hi - g_lo), 0.0)
         alpha = jnp.where(k == 0, a_lo, a_lo + (a_hi - a_lo) * jnp.clip(frac, 0.0, 0.9))
+        # The polish (y within tol): the full step, Newton's, wherever it does not
+        # raise the imbalance. At the root g(1) is rounding, and an interpolated
+        # α ≈ 0.95 would converge linearly.
+        res_full = jnp.max(jnp.abs(f_trial[0]))
+        full = within_before & (res_full <= jnp.maximum(jnp.max(jnp.abs(fy)), tol_y))
+        alpha = jnp.where(full, 1.0, alpha)
         y_new = y + alpha * dy
         f_new = fn(y_new, None)
-        ok = jnp.all(jnp.isfinite(f_new))
-        y_new = jnp.where(ok, y_new, y + a_lo * dy)
-        f_new = jnp.where(ok, f_new, fn(y + a_lo * dy, None))
-        done = jnp.max(jnp.abs(f_new)) <= tol(y_new)
-        return y_new, f_new, it + 1, done
+        ok = jnp.all(jnp.isfinite(f_new))  # else the bracket's lower end, evaluated above
+        y_new, f_new = jnp.where(ok, y_new, y + a_lo * dy), jnp.where(ok, f_new, f_trial[k])
+        tol_new = tol(y_new)
+        within = jnp.max(jnp.abs(f_new)) <= tol_new
+        if small is None:
+            return y_new, f_new, tol_new, it + 1, within, within
+        # the polish step, from an iterate within tol, is the last: kept where it
+        # stays within tol (else that iterate is the answer)
+        done = within_before | (within & small(y_new - y, y_new))
+        keep = within_before & jnp.invert(within)
+        y_new, f_new = jnp.where(keep, y, y_new), jnp.where(keep, fy, f_new)
+        return y_new, f_new, jnp.where(keep, tol_y, tol_new), it + 1, done, within | keep
 
-    f0 = fn(y0, None)
-    c0 = (y0, f0, jnp.array(0), jnp.max(jnp.abs(f0)) <= tol(y0))
-    y, _, it, _ = lax.while_loop(cond, body, c0)
+    f0, tol0 = fn(y0, None), tol(y0)
+    within0 = jnp.max(jnp.abs(f0)) <= tol0
+    c0 = (y0, f0, tol0, jnp.array(0), within0 if small is None else jnp.array(False), within0)
+    y, _, _, it, _, _ = lax.while_loop(cond, body, c0)
     return lax.stop_gradient(y), it
 
 
@@ -304,12 +333,13 @@ def solve_line_statics(
         line, env: the line and its environment.
         t: time at which the end positions are taken [s].
         init: starting state (default: :func:`initial_guess`).
-        rtol, atol: tolerances of the final Newton polish's steps, relative to
-            the positions and absolute [m]; ``atol`` also caps the descent's
+        rtol, atol: the last step's tolerance, relative to the positions and
+            absolute [m] (or the step after the first iterate within the force
+            tolerance is the last); ``atol`` also caps the descent's
             residual (forces / (EA/l), in m). The result is ``converged`` when
             the largest free-node force imbalance is below 1e-6 of the largest
             tension (or of one segment's weight), or at float64 resolution.
-        max_steps: iteration limit of the descent and of the polish.
+        max_steps: iteration limit of the descent.
         throw: raise ``RuntimeError`` if Newton fails (otherwise inspect
             ``converged``).
     """
@@ -407,14 +437,15 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     r0 = initial_guess(line, env, t).r if init is None else init.r
-    # 1) a regularised Newton descent on the static energy (``_descent``) finds the
-    #    equilibrium from the catenary guess with the true (tension-only) law: it
-    #    cannot stall on the touchdown or slack kinks, and stops 100× below the
-    #    force imbalance that counts as converged (never below what float64
-    #    resolves: positions carry eps·|r| of rounding). 2) optimistix's Newton,
-    #    started there, polishes it. Both search on values only; the answer gets
-    #    its derivative from the implicit function theorem once, however it was
-    #    found (``_implicit``: never the derivative of the iterations).
+    # A regularised Newton descent on the static energy (``_descent``) finds the
+    # equilibrium from the catenary guess with the true (tension-only) law: it
+    # cannot stall on the touchdown or slack kinks. It stops 100× below the force
+    # imbalance that counts as converged (never below what float64 resolves:
+    # positions carry eps·|r| of rounding) once a step is below rtol·|r| + atol,
+    # or one (Newton) step after it first got there: its own polish, no second
+    # root finder in the program. It searches on values only; the answer gets its
+    # derivative from the implicit function theorem once, however it was found
+    # (``_implicit``: never the derivative of the iterations).
     fn = _residual(*_values((line, env, t)))
     k = line.line_type.axial.nominal_ea() / line.segment_length
     scale = _force_scale(line, env, t)
@@ -425,21 +456,15 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
     def tol(y):
         return jnp.maximum(jnp.minimum(atol, 1e-8 * scale(y) / k), floor(y))
 
+    def small(dy, y):
+        return jnp.all(jnp.abs(dy) <= atol + rtol * jnp.abs(y))
+
     banded = line.banded_jacobian
     # from ``init``, the catenary guess once half the steps did not converge
     restart = None if init is None else lax.stop_gradient(initial_guess(line, env, t).r)
-    r_start, damped_steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
-                                     _band_step if banded else _dense_step, restart)
-    solver = (optx.Newton(rtol=rtol, atol=atol, linear_solver=BlockTridiagonalSolver()) if banded
-              else optx.Newton(rtol=rtol, atol=atol))
-    sol = optx.root_find(fn, solver, r_start, max_steps=max_steps, throw=False)
-    # A polish that fails (NaN where the Jacobian is singular: slack line piled on
-    # the bed) or does worse leaves the descent's iterate; either is judged by its
-    # force imbalance alone.
-    res_start = jnp.max(jnp.abs(fn(r_start, None)))
-    res_polish = jnp.max(jnp.abs(fn(sol.value, None)))
-    polished = jnp.all(jnp.isfinite(sol.value)) & (res_polish <= jnp.maximum(res_start, tol(r_start)))
-    r_free = _implicit(jnp.where(polished, sol.value, r_start), line, env, t)
+    r_found, steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
+                              _band_step if banded else _dense_step, restart, small)
+    r_free = _implicit(r_found, line, env, t)
     r, _ = line.nodes(t, LineState(r=r_free, v=jnp.zeros_like(r_free)))
     v0 = jnp.zeros_like(r)
     element = line.element
@@ -459,7 +484,7 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
         tension_b=safe_norm(fb),
         grounded_length=_grounded_length(line, env, r),
         converged=converged,
-        iterations=damped_steps + sol.stats["num_steps"],
+        iterations=steps,
         max_residual=max_res,
     )
     return out
