@@ -174,7 +174,7 @@ def _from_state(line, init, ra, rb) -> HermiteDofs:
 #: (from 8: 1, 44, 47); graded from 2 per element the two sharpest touchdowns
 #: (H/w 0.016 and 0.022 element lengths: the guess's segments are 3-6 times the
 #: graded mesh's first element there) converged or diverged with the rounding of
-#: the linear solve, from 8 both converge (errors 1.5e-5, 2.5e-4 of MoorPy's
+#: the linear solve, from 8 both converge (errors 2.9e-5, 2.5e-4 of MoorPy's
 #: largest tension, against 1.1e-3, 2.1e-3 from 2).
 GUESS_SEGMENTS = (2, 8)
 
