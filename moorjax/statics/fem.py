@@ -342,7 +342,29 @@ def solve_line_statics(
         max_steps: iteration limit of the descent.
         throw: raise ``RuntimeError`` if Newton fails (otherwise inspect
             ``converged``).
+
+    A grounded line of equal Hermite elements solved outside ``jit`` is checked
+    against the linear element at :data:`~moorjax.statics.hermite.FINE_SEGMENTS`
+    segments per element (:func:`~moorjax.statics.hermite.check_resolution`):
+    where their end tensions differ by more than
+    :data:`~moorjax.statics.hermite.RESOLUTION_TOL` the touchdown bends
+    more sharply than the elements resolve, and it warns
+    (``UnresolvedTouchdownWarning``; ``converged`` says only that the discrete
+    equations are solved).
     """
+    out = line_statics(line, env, t, init, rtol=rtol, atol=atol, max_steps=max_steps, throw=throw,
+                       method=method)
+    from .hermite import check_resolution
+
+    check_resolution(line, env, out, t)
+    return out
+
+
+def line_statics(line, env, t=0.0, init=None, *, rtol=RTOL, atol=ATOL, max_steps=MAX_STEPS,
+                 throw=True, method="fem") -> LineStatics:
+    """:func:`solve_line_statics` without its check of a Hermite line's
+    resolution (what :func:`moorjax.statics.hermite.touchdown_mesh` calls
+    while it grades the mesh)."""
     check_geometry(line, env, t)
     from .exact import catenary_eligible
 

@@ -561,7 +561,8 @@ def graded_mesh(length: float, n: int, start: float, end: float, first: float,
 
 class UnresolvedTouchdownWarning(UserWarning):
     """A Hermite line's touchdown bends within a small part of an element
-    (:func:`touchdown_mesh`): its static end tensions are unreliable."""
+    (:func:`touchdown_mesh`, :func:`check_resolution`): its static end tensions
+    are unreliable."""
 
 
 def _warn_unresolved(line: Line, scale):
@@ -577,6 +578,72 @@ def _warn_unresolved(line: Line, scale):
         f"element), and its static end tensions, the grounded end's most, are unreliable (drawn lines: "
         f"up to 1.3 % off the analytic catenary). Use about {needed} elements or more.",
         UnresolvedTouchdownWarning, stacklevel=3)
+
+
+#: the relative difference of end tensions (each over its own value, at least
+#: 1e-3 of the larger) between a grounded line of equal Hermite elements and the
+#: linear element at :data:`FINE_SEGMENTS` segments per element above which
+#: :func:`check_resolution` warns. On the 98 grounded drawn lines of
+#: ``tests/test_hermite_statics_property.py`` at 10 elements the difference
+#: tracks the Hermite error against MoorPy (own value) within about 10 % of it:
+#: the 26 lines above 5e-2 are 4.8e-2 … 56 off, the others at most 4.9e-2.
+RESOLUTION_TOL = 5e-2
+
+
+def _concrete(x) -> bool:
+    """Whether ``x`` is a value (not traced under ``jit``/``vmap``/``grad``)."""
+    return not isinstance(x, jax.core.Tracer)
+
+
+def check_resolution(line: Line, env, st, t=0.0) -> float | None:
+    """Warn where a grounded line of equal Hermite elements does not resolve
+    its touchdown; returns the relative end-tension difference it measured
+    (None where it does not apply).
+
+    ``st`` is the line's :class:`~moorjax.statics.fem.LineStatics`. Newton's
+    ``converged`` says that the discrete equations are solved, not that 10
+    cubics follow a catenary that bends within a small part of an element at
+    its touchdown: on drawn lines such solutions are up to 56 times off at the
+    grounded end, and some of them (draws 122, 132 of the property test) even
+    come with a larger horizontal pull than the true one, so a check of H/w
+    against the element length misses them. This solves the same line with the
+    linear element at :data:`FINE_SEGMENTS` segments per element (lumped nodes
+    follow a kink; one more static solve, compiled once per segment count) and
+    warns (:class:`UnresolvedTouchdownWarning`) where an end tension differs by
+    more than :data:`RESOLUTION_TOL` of its own value (at least 1e-3 of the
+    larger end tension).
+
+    Applies only to values (not under ``jit``/``vmap``), to Hermite lines of
+    equal elements (``element.mesh`` None: a mesh graded by
+    :func:`touchdown_mesh` has its own check) on a seabed whose solution
+    converged and rests on the bed.
+    """
+    import warnings
+
+    from ..element.hermite import HermiteElement
+    from .fem import line_statics
+
+    if (env.seabed is None or not isinstance(line.element, HermiteElement) or line.element.mesh is not None
+            or not all(_concrete(x) for x in (st.converged, st.grounded_length, st.tension_a))):
+        return None
+    if not bool(st.converged) or not float(st.grounded_length) > 0.0:
+        return None
+    fine = line_statics(_fine_linear(line), env, t, throw=False)
+    if not bool(fine.converged):
+        return None
+    ours = np.array([float(st.tension_a), float(st.tension_b)])
+    ref = np.array([float(fine.tension_a), float(fine.tension_b)])
+    off = np.abs(ours - ref) / np.maximum(ref, 1e-3 * ref.max())
+    worst = int(np.argmax(off))
+    if off[worst] > RESOLUTION_TOL:
+        n = line.n_segments
+        warnings.warn(
+            f"line {line.label}: {n} equal Hermite elements do not resolve its touchdown: end "
+            f"{'AB'[worst]}'s static tension {ours[worst]:.6g} N differs by {100 * off[worst]:.3g} % from "
+            f"the linear element's at {FINE_SEGMENTS * n} segments ({ref[worst]:.6g} N). Grade the "
+            f"elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; CLI: --hermite-mesh "
+            f"touchdown) or use more elements.", UnresolvedTouchdownWarning, stacklevel=3)
+    return float(off[worst])
 
 
 def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 1e-3,
@@ -623,7 +690,7 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
     the mesh is a value of the line (changing it does not recompile).
     """
     from ..element.hermite import HermiteElement
-    from .fem import solve_line_statics
+    from .fem import line_statics
 
     if env.seabed is None or not isinstance(line.element, HermiteElement):
         return line
@@ -649,12 +716,12 @@ def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 
         return best
 
     for _ in range(iterations + 1):
-        st = solve_line_statics(current, env_static, t, throw=False)
+        st = line_statics(current, env_static, t, throw=False)
         ok = bool(st.converged) and bool(jnp.all(jnp.isfinite(st.rest_state.r)))
         if here is None and (not ok or _sharp(st, on_a, on_b, w, mean)):
             # the first touchdown from the linear element's equilibrium (see
             # FINE_SEGMENTS), where equal Hermite elements fail or bend too sharply
-            st = solve_line_statics(_fine_linear(line), env_static, t, throw=False)
+            st = line_statics(_fine_linear(line), env_static, t, throw=False)
             ok = bool(st.converged)
         if not ok:
             return finish()
