@@ -182,3 +182,27 @@ def test_gradient_through_a_point_scene():
     print(grad, fd)
     assert abs(grad) > 10.0  # N per m³: the buoyancy reaches the fairlead within 0.2 s
     assert abs(grad / fd - 1) < 1e-4, (grad, fd)
+
+
+def test_gradient_of_the_line_states_of_a_body_start():
+    """The lines' static states of a body scene's start carry the derivative of
+    the lines' statics: since session 38 they come from the bodies' Newton
+    iteration itself (no second solve at the poses; linear-element lines), the
+    derivative from a custom JVP that solves them again only under
+    differentiation. d(two node positions)/d(the point's volume) equals central
+    differences (6 linear segments; measured 2.7593e-1 against 2.7588e-1, the
+    same gradient as the second solve gave)."""
+    import equinox as eqx
+
+    from moorjax.dynamics.initial import equilibrium_state
+
+    scene = point_scene(6)
+
+    def nodes(volume):
+        s = eqx.tree_at(lambda s: s.bodies[0].volume, scene, volume)
+        state = equilibrium_state(s).state
+        return state[0].r[2, 2] + 0.3 * state[1].r[1, 0]
+
+    grad, fd, _ = gradient_and_central_difference(nodes, 70.0, 0.05)
+    assert abs(grad) > 0.1
+    assert abs(grad / fd - 1) < 1e-3, (grad, fd)

@@ -32,7 +32,7 @@ from .._cache import StoredProgram
 from .._numerics import as_float
 from ..body.coupling import attach, mooring_wrenches
 from ..statics import fem
-from ..statics.fem import solve_line_statics
+from ..statics.fem import _solve_core, element_core, solve_line_statics
 from ..statics.system import (HALVINGS, MAX_ITERATIONS, admissible_rise, body_forces, line_starts,
                               STALLS, imbalance_report, line_statics_at, mooring_wrench,
                               newton_step, stalled, sunk_bodies)
@@ -165,17 +165,58 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function
     theorem at the solution (see the end)."""
-    poses, inits, converged, jac, g, wrench = _body_newton(
+    poses, states, lines_ok, converged, jac, g, wrench = _body_newton(
         _stop_gradient(scene_d), jax.lax.stop_gradient(t), loads, tol, max_iterations)
-    # the imbalance and the lines' wrench at the poses come from the iteration;
-    # the poses' derivative from the implicit function theorem, traced only where
-    # a derivative is taken (_implicit_poses)
-    poses = _implicit_poses(poses, jac, scene_d, t, loads, inits)
-    st = line_statics_at(scene_d, poses, t, inits)
-    lines_ok = jnp.stack([s.converged for s in st])
-    state = _states(st) + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
+    # the imbalance, the lines' wrench and states at the poses come from the
+    # iteration; the poses' and the states' derivatives from the implicit
+    # function theorem, traced only where a derivative is taken (_implicit_poses,
+    # _implicit_states): the program holds one copy of the lines' statics, the
+    # iteration's (a second solve at the poses found was 3.5 s of tracing and a
+    # second compiled copy in a body scene's start)
+    poses = _implicit_poses(poses, jac, scene_d, t, loads, states)
+    # lines of other elements (Hermite) are solved again at the poses, as before:
+    # their warm start compares the state with the catenary guess, and on a point
+    # scene of 2-element Hermite lines the re-solve left the iteration's root for
+    # a better one (tests/test_hermite_bodies.py's gradient scene)
+    again = tuple(i for i, ln in enumerate(scene_d.lines) if element_core(ln) is not _solve_core)
+    if again:
+        sub = eqx.tree_at(lambda s: s.lines, scene_d, tuple(scene_d.lines[i] for i in again))
+        st = line_statics_at(sub, poses, t, tuple(states[i] for i in again))
+        states, lines_ok = list(states), lines_ok.at[jnp.array(again)].set(
+            jnp.stack([s.converged for s in st]))
+        for i, s_i in zip(again, _states(st)):
+            states[i] = s_i
+        states = tuple(states)
+    keep = tuple(i for i in range(len(states)) if i not in again)
+    if keep:
+        solved = _implicit_states(tuple(states[i] for i in keep), scene_d, poses, t, keep)
+        states = tuple(solved[keep.index(i)] if i in keep else s_i for i, s_i in enumerate(states))
+    state = states + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
     return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses,
                        jax.lax.stop_gradient(g), jax.lax.stop_gradient(wrench))
+
+
+@eqx.filter_custom_jvp
+def _implicit_states(states, scene, poses, t, which):
+    """``states``, the static states of the lines ``which`` (indices) with their
+    fairleads where ``poses`` put them (the iteration's solve), with the
+    derivative of the lines' statics attached (their implicit-function
+    derivative, through the poses' too): the rule solves the lines again from
+    ``states``, only under differentiation."""
+    return states
+
+
+@_implicit_states.def_jvp
+def _implicit_states_jvp(primals, tangents):
+    states, scene, poses, t, which = primals
+    _, t_scene, t_poses, t_t, _ = tangents
+
+    def solved(sc, p, tt):
+        sub = eqx.tree_at(lambda s: s.lines, sc, tuple(sc.lines[i] for i in which))
+        return _states(line_statics_at(sub, p, tt, states))
+
+    _, dot = eqx.filter_jvp(solved, (scene, poses, t), (t_scene, t_poses, t_t))
+    return states, dot
 
 
 @eqx.filter_custom_jvp
@@ -212,9 +253,9 @@ def _body_newton(scene, t, loads, tol, max_iterations):
     body solves the lines' statics once (warm, linearised for the Jacobian) at a
     trial pose: accepted trials become the base of the next Newton step, rejected
     ones halve the step. One traced copy of the warm line statics keeps the
-    compile small (XLA inlines every copy). Returns (poses, line states,
-    converged, Jacobian at the poses, and the imbalance and the lines' wrench
-    there)."""
+    compile small (XLA inlines every copy). Returns (poses, line states and
+    whether each line's solve converged there, converged, Jacobian at the
+    poses, and the imbalance and the lines' wrench there)."""
     nb = len(scene.bodies)
     n_dof = 6 * nb
     eye = jnp.eye(n_dof).reshape((n_dof,) + (nb, 6))
@@ -237,7 +278,7 @@ def _body_newton(scene, t, loads, tol, max_iterations):
 
     def iteration(c):
         (k, newton_its, trial, base, inits, size, jac, step, scale, _, _, stalls, g_base,
-         w_base) = c
+         w_base, lines_ok) = c
         g, jac_t, states, ok, tens, sts, w = evaluate(trial, inits)
         finite = jnp.all(jnp.isfinite(g))  # (a non-finite J gets newton_step's regularised step)
         size_t = jnp.max(jnp.abs(g))
@@ -251,10 +292,13 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         stalls = jnp.where(accept, jnp.where(~first & stalled(trial - base, size, size_t),
                                              stalls + 1, 0), stalls)
         base = jnp.where(accept, trial, base)
-        inits = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), states, inits)
+        keep = accept | first  # (the first trial is the base, accepted or not)
+        # the lines' states and flags at the base (a first trial that is not
+        # accepted ends the loop: its states, converged or not, are the answer)
+        inits = jax.tree_util.tree_map(lambda a, b: jnp.where(keep, a, b), states, inits)
+        lines_ok = jnp.where(keep, jnp.stack([s.converged for s in sts]), lines_ok)
         size = jnp.where(accept, size_t, size)
         jac = jnp.where(accept, jac_t, jac)
-        keep = accept | first  # (the first trial is the base, accepted or not)
         g_base, w_base = jnp.where(keep, g, g_base), jnp.where(keep, w, w_base)
         converged = accept & (size_t < tol * scale)
         step = jnp.where(accept, newton_step(jac, jnp.where(finite, g, 0.0)), 0.5 * step)
@@ -264,15 +308,15 @@ def _body_newton(scene, t, loads, tol, max_iterations):
                    | (stalls >= STALLS))
         newton_its = newton_its + accept
         return (k, newton_its, base + step, base, inits, size, jac, step, scale,
-                converged | gave_up, converged, stalls, g_base, w_base)
+                converged | gave_up, converged, stalls, g_base, w_base, lines_ok)
 
     zero = jnp.zeros((nb, 6))
     c0 = (0, 0, poses0, poses0, inits0, jnp.inf, jnp.eye(n_dof), zero, 1.0,
           jnp.asarray(False), jnp.asarray(False), 0, jnp.full((nb, 6), jnp.nan),
-          jnp.full((nb, 6), jnp.nan))
+          jnp.full((nb, 6), jnp.nan), jnp.zeros(len(scene.lines), bool))
     c = lax.while_loop(lambda c: (c[1] <= max_iterations) & ~c[9], iteration, c0)
-    _, _, _, poses, inits, _, jac, _, _, _, converged, _, g, w = c
-    return poses, inits, converged, jac, g, w
+    _, _, _, poses, inits, _, jac, _, _, _, converged, _, g, w, lines_ok = c
+    return poses, inits, lines_ok, converged, jac, g, w
 
 
 def failed_lines(scene, eq: Equilibrium) -> list[str]:
