@@ -612,7 +612,7 @@ def _warn_unresolved(line: Line, scale):
 #: :func:`check_resolution` warns. On the 98 grounded drawn lines of
 #: ``tests/test_hermite_statics_property.py`` at 10 elements the difference
 #: follows the Hermite error against MoorPy (own value; within 10 % of it but
-#: for draw 122, 90 against 56): the 26 lines above 5e-2 are 4.8e-2 … 56 off,
+#: for draw 122, 90 against 56): the 26 lines it exceeds 5e-2 on are 4.8e-2 … 56 off,
 #: the others at most 4.9e-2.
 RESOLUTION_TOL = 5e-2
 
