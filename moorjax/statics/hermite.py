@@ -617,11 +617,6 @@ def _warn_unresolved(line: Line, scale):
 RESOLUTION_TOL = 5e-2
 
 
-def _concrete(x) -> bool:
-    """Whether ``x`` is a value (not traced under ``jit``/``vmap``/``grad``)."""
-    return not isinstance(x, jax.core.Tracer)
-
-
 def check_resolution(line: Line, env, st, t=0.0) -> float | None:
     """Warn where a grounded line of equal Hermite elements does not resolve
     its touchdown; returns the relative end-tension difference it measured
@@ -647,11 +642,12 @@ def check_resolution(line: Line, env, st, t=0.0) -> float | None:
     """
     import warnings
 
+    from .._checks import _concrete
     from ..element.hermite import HermiteElement
     from .fem import line_statics
 
     if (env.seabed is None or not isinstance(line.element, HermiteElement) or line.element.mesh is not None
-            or not all(_concrete(x) for x in (st.converged, st.grounded_length, st.tension_a))):
+            or any(_concrete(x) is None for x in (st.converged, st.grounded_length, st.tension_a))):
         return None
     if not bool(st.converged) or not float(st.grounded_length) > 0.0:
         return None
