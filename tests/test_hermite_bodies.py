@@ -206,3 +206,37 @@ def test_gradient_of_the_line_states_of_a_body_start():
     grad, fd, _ = gradient_and_central_difference(nodes, 70.0, 0.05)
     assert abs(grad) > 0.1
     assert abs(grad / fd - 1) < 1e-3, (grad, fd)
+
+
+@pytest.mark.slow
+def test_body_start_with_a_sharp_grounded_hermite_line_converges_and_warns():
+    """A buoyant point on three 1500 m chains with 1.1 km on the bed each, the
+    first of 10 equal Hermite elements (their touchdown bends within a third of
+    an element), the others linear. The start used to stop with lineax's
+    "non-finite input" inside the bodies' Newton iteration (the Hermite
+    statics' derivative, see ``test_hermite_mesh.py``); now it converges, and
+    the Hermite line's static solve at the pose found is checked as
+    ``solve_line_statics`` checks a line without bodies: it warns
+    (``UnresolvedTouchdownWarning``, measured 7.7 % at the anchor against the
+    linear element at 80 segments), for that line only."""
+    import warnings
+
+    from moorjax.dynamics import equilibrium_state
+    from moorjax.statics.hermite import UnresolvedTouchdownWarning
+
+    chain = mj.LineType(0.09, 77.7066, 384.243e6)
+    bed = mj.Environment(depth=300.0, seabed=mj.Seabed(stiffness=3e6, damping=3e5))
+    anchors = [1300.0 * np.array([np.cos(a), np.sin(a), 0.0]) + [0, 0, -300.0]
+               for a in (np.pi, np.pi / 3, -np.pi / 3)]
+    lines = [mj.Line(chain, 1500.0, 10, mj.FixedEnd(a), mj.BodyEnd(0, [0, 0, 0]),
+                     element=HermiteElement() if i == 0 else None, label=f"L{i + 1}")
+             for i, a in enumerate(anchors)]
+    scene = mj.Scene(lines, bed, bodies=[ConnectionPoint(2e4, [0, 0, -20.0], volume=90.0)])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        eq = equilibrium_state(scene)
+    said = [str(w.message) for w in caught if issubclass(w.category, UnresolvedTouchdownWarning)]
+    assert bool(eq.converged), eq.lines_converged
+    assert len(said) == 1 and "line L1" in said[0] and "end A" in said[0], said
+    assert eq.statics[0] is not None and eq.statics[1] is None and eq.statics[2] is None
+    assert float(eq.statics[0].grounded_length) > 1000.0

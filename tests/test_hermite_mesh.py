@@ -178,6 +178,32 @@ def test_solve_line_statics_warns_where_equal_elements_miss_the_touchdown():
     assert said == [] and abs(float(st.tension_a) / ta - 1) < 1e-3
 
 
+def test_derivative_of_a_sharp_grounded_line_at_equal_elements():
+    """The same 1500 m chain: the derivative of the fairlead force with respect
+    to the fairlead's height, forward and reverse, equals central differences.
+    It used to raise (lineax: "non-finite input") under ``jax.jacfwd`` and
+    ``jax.linearize``, so a body scene with this line could not start: the
+    implicit derivatives were optimistix's, taken at its Newton's value, and
+    the strain closure's Newton fails on this line (a singular Jacobian; the
+    start falls back to Wu's equilibrium), so lineax met its NaN. Now the root
+    kept gets it (``moorjax.statics.fem.implicit_root``, never raising)."""
+    import jax
+
+    bed = mj.Environment(depth=300.0, seabed=mj.Seabed(stiffness=3e6, damping=3e5))
+
+    def force_b(zb):
+        line = mj.Line(LT, 1500.0, 10, mj.FixedEnd((-1300.0, 0.0, -300.0)),
+                       mj.FixedEnd(jnp.stack([0.0, 0.0, zb])), element=HermiteElement())
+        return solve_line_statics(line, bed, throw=False).force_b
+
+    zb, h = -20.0, 1e-2
+    central = (np.asarray(force_b(zb + h)) - np.asarray(force_b(zb - h))) / (2 * h)
+    for jac in (jax.jacfwd, jax.jacrev):
+        d = np.asarray(jac(force_b)(zb))
+        assert np.all(np.isfinite(d)) and np.allclose(d, central, rtol=1e-6, atol=1e-6 * abs(central).max()), (
+            d, central)  # measured: 6e-8 of |d| apart
+
+
 def test_cli_statics_grades_hermite_lines_at_the_touchdown(capsys):
     from moorjax.cli import main
 

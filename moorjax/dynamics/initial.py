@@ -50,6 +50,12 @@ class Equilibrium(eqx.Module):
         poses: (n_bodies, 6) body poses η [m, rad] (``None`` without bodies).
         imbalance, mooring: (n_bodies, 6) force and moment left on each body, and
             the lines' part of it, at ``poses`` [N, N·m] (``None`` without bodies).
+        statics: with bodies, per line the ``LineStatics`` of the line's own
+            static solve at ``poses`` where its state comes from one (lines of
+            other elements than the linear one, solved again at the poses), else
+            ``None`` (the bodies' iteration's state); ``None`` without bodies.
+            :func:`equilibrium_state` checks these lines' touchdown resolution
+            as :func:`~moorjax.statics.fem.solve_line_statics` does.
     """
 
     state: tuple
@@ -58,6 +64,7 @@ class Equilibrium(eqx.Module):
     poses: Array | None = None
     imbalance: Array | None = None
     mooring: Array | None = None
+    statics: tuple | None = None
 
 
 def check_geometry(scene, t0=0.0):
@@ -108,8 +115,26 @@ def equilibrium_state(scene, t0=0.0, *, loads: bool = True, tol: float = 1e-6,
         sts = [solve_line_statics(line, scene.env, t0, throw=False) for line in scene.lines]
         return _lines_equilibrium(tuple(sts))
     check_geometry(scene, t0)
-    return _body_equilibrium(scene, as_float(t0), bool(loads), float(tol),
-                             int(max_iterations))
+    eq = _body_equilibrium(scene, as_float(t0), bool(loads), float(tol), int(max_iterations))
+    _check_resolution_at_poses(scene, eq, t0)
+    return eq
+
+
+def _check_resolution_at_poses(scene, eq: Equilibrium, t0):
+    """:func:`~moorjax.statics.hermite.check_resolution` (what
+    :func:`~moorjax.statics.fem.solve_line_statics` runs outside ``jit``) for
+    the lines a body scene's start solved at the poses found: a grounded line
+    of equal Hermite elements whose touchdown they do not follow warns here as
+    it does without bodies. Nothing under ``jit``/``vmap`` (ensembles)."""
+    from .._checks import _concrete
+    from ..statics.hermite import check_resolution
+    from ..statics.system import _attached
+
+    if eq.statics is None or all(st is None for st in eq.statics) or _concrete(eq.poses) is None:
+        return
+    for line, st in zip(_attached(scene, eq.poses), eq.statics):
+        if st is not None:
+            check_resolution(line, scene.env, st, t0)
 
 
 @eqx.filter_jit
@@ -187,13 +212,16 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
         for i, s_i in zip(again, _states(st)):
             states[i] = s_i
         states = tuple(states)
+        statics = tuple(st[again.index(i)] if i in again else None for i in range(len(states)))
+    else:
+        statics = None
     keep = tuple(i for i in range(len(states)) if i not in again)
     if keep:
         solved = _implicit_states(tuple(states[i] for i in keep), scene_d, poses, t, keep)
         states = tuple(solved[keep.index(i)] if i in keep else s_i for i, s_i in enumerate(states))
     state = states + tuple(b.rest_state(p) for b, p in zip(scene_d.bodies, poses))
     return Equilibrium(state, lines_ok, converged & jnp.all(lines_ok), poses,
-                       jax.lax.stop_gradient(g), jax.lax.stop_gradient(wrench))
+                       jax.lax.stop_gradient(g), jax.lax.stop_gradient(wrench), statics)
 
 
 @eqx.filter_custom_jvp

@@ -434,24 +434,42 @@ def _values(tree):
 
 
 @eqx.filter_custom_jvp
-def _implicit(r_free, line, env, t):
-    """``r_free``, an equilibrium of ``_residual(line, env, t)``, with the
-    implicit-function derivative ṙ = −J⁻¹·∂F/∂θ·θ̇ attached. J⁻¹ is the
-    solve of :class:`~moorjax.linalg.undetermined.MinimumNorm`: LU, or where J is
+def implicit_root(y, residual, params):
+    """``y``, a root of ``residual(*params)`` (a function ``(y, args) -> F``, as
+    optimistix and lineax call it), with the implicit-function derivative
+    ẏ = −J⁻¹·∂F/∂θ·θ̇ attached, however ``y`` was found (never the derivative of
+    the iterations). J⁻¹ is the solve of
+    :class:`~moorjax.linalg.undetermined.MinimumNorm`: LU, or where J is
     singular (the undetermined shape of a slack weightless line) the
-    minimum-norm solution, or zero where J is not finite; it never raises."""
-    return r_free
+    minimum-norm solution, or zero where J or ``y`` is not finite (a failed
+    solve); it never raises. It replaces optimistix's own implicit derivative
+    in the Hermite statics, which is taken at optimistix's Newton value: where
+    that Newton fails, as the strain closure's does on a 1500 m chain with
+    1.1 km on the bed (a singular Jacobian; the start falls back to Wu's
+    equilibrium), lineax raised on its NaN under ``jax.jacfwd`` and
+    ``jax.linearize``, and a body scene with such a line could not start."""
+    return y
 
 
-@_implicit.def_jvp
-def _implicit_jvp(primals, tangents):
-    r_free, line, env, t = primals
-    _, t_line, t_env, t_t = tangents
-    _, b_dot = eqx.filter_jvp(lambda ln, e, tt: _residual(ln, e, tt)(r_free, None), (line, env, t),
-                              (t_line, t_env, t_t))
-    op = lx.JacobianLinearOperator(_residual(line, env, t), r_free)
-    r_dot = -lx.linear_solve(op, b_dot, MinimumNorm(), throw=False).value
-    return r_free, r_dot
+@implicit_root.def_jvp
+def _implicit_root_jvp(primals, tangents):
+    y, residual, params = primals
+    _, _, t_params = tangents
+    f, b_dot = eqx.filter_jvp(lambda p: residual(*p)(y, None), (params,), (t_params,))
+    # an output the tangents do not reach comes back as None (a symbolic zero)
+    if b_dot is None:
+        b_dot = jax.tree.map(jnp.zeros_like, f)
+    b_dot = jax.tree.map(lambda fi, bi: jnp.zeros_like(fi) if bi is None else bi, f, b_dot,
+                         is_leaf=lambda x: x is None)
+    op = lx.JacobianLinearOperator(residual(*params), y)
+    y_dot = lx.linear_solve(op, b_dot, MinimumNorm(), throw=False).value
+    return y, jax.tree.map(jnp.negative, y_dot)
+
+
+def _implicit(r_free, line, env, t):
+    """``r_free``, an equilibrium of ``_residual(line, env, t)``, with its
+    implicit-function derivative (:func:`implicit_root`)."""
+    return implicit_root(r_free, _residual, (line, env, t))
 
 
 @functools.partial(StoredProgram, compile_for="once")  # as _exact_core

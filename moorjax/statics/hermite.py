@@ -199,28 +199,30 @@ def _equilibrium(line, env, t, init, rtol, atol, max_steps):
     :func:`_balance` of the unknowns."""
     lt = line.line_type
     ra, rb = line.end_a.position(t), line.end_b.position(t)
-    fn = _scaled_residual(line, env, t)
+    from .fem import _values, implicit_root
+
     solver = optx.Newton(rtol=rtol, atol=atol)
+    # the search runs on values only; the root kept gets its derivative from the
+    # implicit function theorem (implicit_root: at the root kept, never raising)
+    values = _scaled_residual(*_values((line, env, t)))
 
     def solve(y0):
         y0 = jax.lax.stop_gradient((y0.r[1:-1], y0.dr, y0.lam))
         if lt.ei is not None and init is None:
             y0 = _bending_continuation(line, env, t, y0, rtol, atol, max_steps)
         if env.seabed is None:
-            sol = optx.root_find(fn, solver, y0, max_steps=max_steps, throw=False)
-            return _assemble(line, ra, rb, sol.value), sol.stats["num_steps"]
+            sol = optx.root_find(values, solver, y0, max_steps=max_steps, throw=False)
+            y = implicit_root(sol.value, _scaled_residual, (line, env, t))
+            return _assemble(line, ra, rb, y), sol.stats["num_steps"]
         # the contact's kinks: where plain Newton cycles or diverges
-        from .fem import _values
-
-        values = _scaled_residual(*_values((line, env, t)))  # a search on values only
         y0, size0 = _damped_newton(lambda y: values(y, None), y0, atol, max_steps)
-        sol = optx.root_find(fn, solver, y0, max_steps=max_steps, throw=False)
+        sol = optx.root_find(values, solver, y0, max_steps=max_steps, throw=False)
         # Newton unguarded after a damped search that stopped short of a root can
         # run off (to 1e17 m): the damped iterate stands where Newton's is worse
-        # and outside the tolerance (at a root the two differ by rounding, and
-        # Newton's carries the implicit derivative)
+        # and outside the tolerance (at a root the two differ by rounding)
         worse = _size(values(sol.value, None)) > jnp.maximum(size0, atol)
         y = jax.tree.map(lambda a, b: jnp.where(worse, a, b), y0, sol.value)
+        y = implicit_root(y, _scaled_residual, (line, env, t))
         return _assemble(line, ra, rb, y), sol.stats["num_steps"]
 
     def balanced(dofs, steps):
@@ -361,8 +363,12 @@ def _bending_continuation(line, env, t, y0, rtol, atol, max_steps):
     902 N/m hung between points 17 m apart with EI = 3.4e4 N·m² (bending length
     ≈ 10 % of L), which 8 and 16 elements failed from the catenary and solve in
     4 steps per stage by these stages. Gradients: the stages start the final
-    solve only (no gradient flows through them).
+    solve only (no gradient flows through them; they run on values, so no
+    derivative of a failed stage is ever formed).
     """
+    from .fem import _values
+
+    line, env, t = _values((line, env, t))
     lt = line.line_type
     h = line.segment_length
     k = lt.axial.nominal_ea() / h
@@ -381,7 +387,7 @@ def _bending_continuation(line, env, t, y0, rtol, atol, max_steps):
         return jax.tree.map(lambda a, b: jnp.where(ok, a, b), sol.value, y), None
 
     y, _ = jax.lax.scan(stage, y0, jnp.asarray(EI_STAGES))
-    return jax.lax.stop_gradient(y)
+    return y
 
 
 def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10, atol=1e-8,
@@ -394,31 +400,42 @@ def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10
     error), so that a run starts at rest in its own equilibrium.
     """
     from ..element.hermite_motion import MixedTension
+    from .fem import _values, implicit_root
 
-    closure = line.element.tension
-    if isinstance(closure, MixedTension):
+    if isinstance(line.element.tension, MixedTension):
         return dofs
-    h = line.segment_length
-    k = line.line_type.axial.nominal_ea() / h
     ra, rb = line.end_a.position(t), line.end_b.position(t)
-
-    def fn(y, args):
-        del args
-        full = _assemble(line, ra, rb, (y[0], y[1], dofs.lam))
-        full, tension = closure.resolve(line, full)
-        force, moment = generalized_forces(line, env, full, None, t, tension)
-        return force[1:-1] / k, _clamp(line, t, moment / (k * h), y[1])
-
     y0 = jax.lax.stop_gradient((dofs.r[1:-1], dofs.dr))
-    sol = optx.root_find(fn, optx.Newton(rtol=rtol, atol=atol), y0, max_steps=max_steps,
+    values = _closure_residual(*_values((line, env, t, dofs.lam)))
+    sol = optx.root_find(values, optx.Newton(rtol=rtol, atol=atol), y0, max_steps=max_steps,
                          throw=False)
     # where the closure's Newton fails (its Jacobian is singular where a whole
     # element is slack: the unilateral law has no compression stiffness), the
     # run starts from Wu's equilibrium itself rather than from NaN
     ok = (sol.result == optx.RESULTS.successful) & jnp.all(jnp.isfinite(sol.value[0])) & jnp.all(
         jnp.isfinite(sol.value[1]))
-    r, dr = (jnp.where(ok, a, b) for a, b in zip(sol.value, (dofs.r[1:-1], dofs.dr)))
+    y = implicit_root(sol.value, _closure_residual, (line, env, t, dofs.lam))
+    r, dr = (jnp.where(ok, a, b) for a, b in zip(y, (dofs.r[1:-1], dofs.dr)))
     return _assemble(line, ra, rb, (r, dr, dofs.lam))
+
+
+def _closure_residual(line, env, t, lam):
+    """The dynamics' tension closure's static residual of the free positions and
+    slopes with Wu's tension field ``lam`` held (:func:`closure_equilibrium`),
+    forces over the element stiffness EA/h."""
+    closure = line.element.tension
+    h = line.segment_length
+    k = line.line_type.axial.nominal_ea() / h
+    ra, rb = line.end_a.position(t), line.end_b.position(t)
+
+    def fn(y, args):
+        del args
+        full = _assemble(line, ra, rb, (y[0], y[1], lam))
+        full, tension = closure.resolve(line, full)
+        force, moment = generalized_forces(line, env, full, None, t, tension)
+        return force[1:-1] / k, _clamp(line, t, moment / (k * h), y[1])
+
+    return fn
 
 
 # eqx.filter_jit, its program also stored on disk (moorjax._cache) and compiled
