@@ -204,17 +204,13 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     # scene of 2-element Hermite lines the re-solve left the iteration's root for
     # a better one (tests/test_hermite_bodies.py's gradient scene)
     again = tuple(i for i, ln in enumerate(scene_d.lines) if element_core(ln) is not _solve_core)
+    statics = None
     if again:
         sub = eqx.tree_at(lambda s: s.lines, scene_d, tuple(scene_d.lines[i] for i in again))
-        st = line_statics_at(sub, poses, t, tuple(states[i] for i in again))
-        states, lines_ok = list(states), lines_ok.at[jnp.array(again)].set(
-            jnp.stack([s.converged for s in st]))
-        for i, s_i in zip(again, _states(st)):
-            states[i] = s_i
-        states = tuple(states)
-        statics = tuple(st[again.index(i)] if i in again else None for i in range(len(states)))
-    else:
-        statics = None
+        solved_again = dict(zip(again, line_statics_at(sub, poses, t, tuple(states[i] for i in again))))
+        statics = tuple(solved_again.get(i) for i in range(len(states)))
+        states = tuple(st.state() if st is not None else s_i for st, s_i in zip(statics, states))
+        lines_ok = lines_ok.at[jnp.array(again)].set(jnp.stack([solved_again[i].converged for i in again]))
     keep = tuple(i for i in range(len(states)) if i not in again)
     if keep:
         solved = _implicit_states(tuple(states[i] for i in keep), scene_d, poses, t, keep)
