@@ -55,17 +55,19 @@ class MinimumNorm(lx.AbstractLinearSolver):
         return self._factor(operator.as_matrix(), operator.in_structure())
 
     def _factor(self, a, structure):
-        """(a, its LU factors and pivots, whether a counts as regular, structure)."""
-        lu, piv = jax.scipy.linalg.lu_factor(a)
+        """(a, the LU factors and pivots of its equilibrated form, the row and
+        column scales, whether a counts as regular, structure)."""
+        rows, cols = _equilibration(a)
+        lu, piv = jax.scipy.linalg.lu_factor(rows[:, None] * a * cols[None, :])
         d = jnp.abs(jnp.diag(lu))
         regular = jnp.all(jnp.isfinite(lu)) & (jnp.min(d) > self.rcond * jnp.max(d))
-        return a, lu, piv, regular, structure
+        return a, lu, piv, (rows, cols), regular, structure
 
     def compute(self, state, vector, options: dict[str, Any]):
-        a, lu, piv, regular, structure = state
+        a, lu, piv, (rows, cols), regular, structure = state
         b, _ = jax.flatten_util.ravel_pytree(vector)
 
-        x_lu = jax.scipy.linalg.lu_solve((lu, piv), b)
+        x_lu = cols * jax.scipy.linalg.lu_solve((lu, piv), rows * b)
 
         def least_squares():
             # after the LU solve: batched (vmap over lines turns the cond into a
@@ -80,7 +82,7 @@ class MinimumNorm(lx.AbstractLinearSolver):
         return unravel(x), lx.RESULTS.successful, {}
 
     def transpose(self, state, options: dict[str, Any]):
-        a, _, _, _, structure = state
+        a, *_, structure = state
         return self._factor(a.T, structure), options
 
     def conj(self, state, options: dict[str, Any]):
@@ -88,6 +90,24 @@ class MinimumNorm(lx.AbstractLinearSolver):
 
     def assume_full_rank(self) -> bool:
         return False
+
+
+def _equilibration(a):
+    """Row and column scales (powers of two) that bring every row's and column's
+    largest magnitude of ``a`` to about one (LAPACK's ``dgeequ``). The unknowns
+    of a static solve carry different units (positions, slopes, tensions) and
+    element lengths graded a hundredfold apart: unscaled, the pivot ratio of a
+    regular Jacobian falls below ``rcond`` and its derivative was taken as
+    singular (the minimum-norm tangent, wrong: a graded line of drawn line 47
+    in ``tests/test_hermite_statics_property.py``). A zero row or column keeps
+    scale one (and stays singular)."""
+    def scale(m):
+        m = jnp.where(jnp.isfinite(m) & (m > 0.0), m, 1.0)
+        return jnp.exp2(-jnp.round(jnp.log2(m)))
+
+    rows = scale(jnp.max(jnp.abs(a), axis=1))
+    cols = scale(jnp.max(jnp.abs(rows[:, None] * a), axis=0))
+    return rows, cols
 
 
 def _zeros(structure):
