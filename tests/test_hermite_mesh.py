@@ -178,6 +178,36 @@ def test_solve_line_statics_warns_where_equal_elements_miss_the_touchdown():
     assert said == [] and abs(float(st.tension_a) / ta - 1) < 1e-3
 
 
+def test_ensemble_members_are_checked_for_their_touchdown():
+    """Ensembles solve their statics batched (vmapped, inside jit), where
+    ``solve_line_statics``' check on values cannot run. They run the same
+    comparison batched (``resolution_offsets``) and warn once per line, naming
+    the members: the 1500 m chain above from anchors 1300, 1440 and 1460 m
+    away. The first member's touchdown is not resolved (5.67 %), the others'
+    are (measured 3.9e-4 and 2.5e-4); each member's offset is the one
+    ``check_resolution`` measures on the line alone."""
+    from moorjax.ensemble import stack
+    from moorjax.ensemble.run import _equilibrium, equilibrium
+    from moorjax.statics.hermite import RESOLUTION_TOL, check_resolution
+
+    bed = mj.Environment(depth=300.0, seabed=mj.Seabed(stiffness=3e6, damping=3e5))
+    lines = [mj.Line(LT, 1500.0, 10, mj.FixedEnd((x, 0.0, -300.0)), mj.FixedEnd((0.0, 0.0, -20.0)),
+                     element=HermiteElement(), label="long") for x in (-1300.0, -1440.0, -1460.0)]
+    scenes = [mj.Scene(lines=(line,), env=bed) for line in lines]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _, ok = equilibrium(scenes)
+        alone = [check_resolution(line, bed, solve_line_statics(line, bed, throw=False)) for line in lines]
+    said = [str(x.message) for x in caught if issubclass(x.category, UnresolvedTouchdownWarning)]
+    assert np.all(np.asarray(ok))
+    ensemble = [m for m in said if "ensemble members" in m]
+    assert len(ensemble) == 1 and "line long" in ensemble[0] and "1 of 3 ensemble members [0]" in ensemble[0]
+    _, _, off = _equilibrium(stack(scenes), 0.0)
+    worst = np.nanmax(off[:, 0, :], axis=1)
+    assert worst[0] > RESOLUTION_TOL > max(worst[1:]), worst
+    np.testing.assert_allclose(worst, alone, rtol=1e-6)
+
+
 def test_derivative_of_a_sharp_grounded_line_at_equal_elements():
     """The same 1500 m chain: the derivative of the fairlead force with respect
     to the fairlead's height, forward and reverse, equals central differences.

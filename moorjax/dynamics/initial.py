@@ -50,12 +50,14 @@ class Equilibrium(eqx.Module):
         poses: (n_bodies, 6) body poses η [m, rad] (``None`` without bodies).
         imbalance, mooring: (n_bodies, 6) force and moment left on each body, and
             the lines' part of it, at ``poses`` [N, N·m] (``None`` without bodies).
-        statics: with bodies, per line the ``LineStatics`` of the line's own
-            static solve at ``poses`` where its state comes from one (lines of
-            other elements than the linear one, solved again at the poses), else
-            ``None`` (the bodies' iteration's state); ``None`` without bodies.
-            :func:`equilibrium_state` checks these lines' touchdown resolution
-            as :func:`~moorjax.statics.fem.solve_line_statics` does.
+        statics: per line the ``LineStatics`` of the line's own static solve
+            where its state comes from one, else ``None``. Without bodies every
+            line's; with bodies those of the lines of other elements than the
+            linear one, solved again at ``poses`` (the others' states come from
+            the bodies' iteration). :func:`equilibrium_state` checks these
+            lines' touchdown resolution as
+            :func:`~moorjax.statics.fem.solve_line_statics` does; ensembles
+            check them batched (:func:`resolution_offsets`).
     """
 
     state: tuple
@@ -137,12 +139,34 @@ def _check_resolution_at_poses(scene, eq: Equilibrium, t0):
             check_resolution(line, scene.env, st, t0)
 
 
+def resolution_offsets(scene, eq: Equilibrium, t0=0.0):
+    """Traceable touchdown check of a start's Hermite lines: (n_lines, 2)
+    relative end-tension differences (ends A, B) from the linear element at
+    :data:`~moorjax.statics.hermite.FINE_SEGMENTS` segments per element
+    (:func:`moorjax.statics.hermite.resolution_offsets`), NaN where it does not
+    apply; ``None`` where no line of the scene is checked (by structure:
+    :func:`~moorjax.statics.hermite.resolution_checked`). What
+    :func:`equilibrium_state` checks on values, for ``vmap``: ensembles warn
+    with it, naming the members."""
+    from ..statics.hermite import resolution_checked
+    from ..statics.hermite import resolution_offsets as offsets
+    from ..statics.system import _attached
+
+    lines = scene.lines if eq.poses is None else _attached(scene, eq.poses)
+    sts = eq.statics if eq.statics is not None else (None,) * len(lines)
+    checked = [st is not None and resolution_checked(line, scene.env) for line, st in zip(lines, sts)]
+    if not any(checked):
+        return None
+    return jnp.stack([offsets(line, scene.env, st, t0)[0] if c else jnp.full(2, jnp.nan)
+                      for line, st, c in zip(lines, sts, checked)])
+
+
 @eqx.filter_jit
 def _lines_equilibrium(sts) -> Equilibrium:
     """The lines' static solves as one start (one small program, not one eager
     XLA operation per slice and stack)."""
     ok = jnp.stack([st.converged for st in sts])
-    return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok))
+    return Equilibrium(tuple(st.state() for st in sts), ok, jnp.all(ok), statics=sts)
 
 
 def catenary_state(scene, t0=0.0) -> Equilibrium:

@@ -42,7 +42,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from .._cache import StoredProgram
-from ..dynamics.initial import check_geometry, equilibrium_state, start_layout
+from ..dynamics.initial import check_geometry, equilibrium_state, resolution_offsets, start_layout
 from ..dynamics.integrate import (SUCCESS_CODE, SimulationResult, integrate, result_codes,
                                   result_names, storable_run)
 from ..dynamics.settings import plan
@@ -72,7 +72,7 @@ _batched_integrate = StoredProgram(_vmapped_integrate, storable=storable_run, sh
 def _traced_equilibrium(scene, t0):
     TRACES["statics"] += 1
     eq = equilibrium_state(scene, t0)
-    return eq.state, eq.lines_converged, eq.converged
+    return eq.state, eq.lines_converged, eq.converged, resolution_offsets(scene, eq, t0)
 
 
 def _vmapped_equilibrium(scenes, t0):
@@ -91,12 +91,49 @@ def equilibrium(scenes, t0: float = 0.0):
     entry also False when the member's bodies did not reach their balance.
     Geometry errors (an end below the seabed, a line too short for its ends)
     are raised for the first offending member of a list before anything runs.
+    Grounded lines of equal Hermite elements are checked as a single start
+    checks them (:func:`moorjax.statics.hermite.check_resolution`), all members
+    at once: one :class:`~moorjax.statics.hermite.UnresolvedTouchdownWarning`
+    per line names the members whose touchdown it does not resolve.
     """
     if isinstance(scenes, (list, tuple)):
         _check_members(scenes, t0)
         scenes = _batch.stack(scenes, name="scene")
-    state, lines_ok, ok = _batched_equilibrium(scenes, float(t0))
-    return state, lines_ok & ok[:, None]
+    state, ok, off = _equilibrium(scenes, t0)
+    warn_unresolved(scenes, off)
+    return state, ok
+
+
+def _equilibrium(scenes, t0):
+    """(states, converged (members, lines), touchdown offsets (members, lines, 2) or None)."""
+    state, lines_ok, ok, off = _batched_equilibrium(scenes, float(t0))
+    return state, lines_ok & ok[:, None], None if off is None else np.asarray(off)
+
+
+def warn_unresolved(scenes, off, members=None):
+    """One :class:`~moorjax.statics.hermite.UnresolvedTouchdownWarning` per
+    line whose touchdown offsets ``off`` ((members, lines, 2), from the batched
+    statics) exceed :data:`~moorjax.statics.hermite.RESOLUTION_TOL` in some
+    members (of the first ``members``; default all), naming them."""
+    from ..statics.hermite import FINE_SEGMENTS, RESOLUTION_TOL, UnresolvedTouchdownWarning
+
+    if off is None:
+        return
+    off = off[:members] if members is not None else off
+    worst = np.nanmax(np.where(np.isfinite(off), off, -np.inf), axis=2)  # (members, lines)
+    for j, line in enumerate(scenes.lines):
+        bad = np.flatnonzero(worst[:, j] > RESOLUTION_TOL)
+        if not bad.size:
+            continue
+        shown = bad.tolist() if bad.size <= 20 else bad[:20].tolist() + ["..."]
+        n = line.n_segments
+        warnings.warn(
+            f"line {line.label}: {n} equal Hermite elements do not resolve its touchdown in "
+            f"{bad.size} of {off.shape[0]} ensemble members {shown}: their static end tensions differ "
+            f"by up to {100 * worst[bad, j].max():.3g} % from the linear element's at {FINE_SEGMENTS * n} "
+            f"segments. Grade the elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; "
+            f"CLI: --hermite-mesh touchdown) or use more elements.", UnresolvedTouchdownWarning,
+            stacklevel=3)
 
 
 def _check_members(scenes, t0):
@@ -229,7 +266,8 @@ def simulate_ensemble(
             lambda x: jax.ShapeDtypeStruct((per_call,) + x.shape, x.dtype, sharding=spec),
             start_layout(first))
         _batched_integrate.compile_ahead(blocks[0], layout, p)
-        init, ok = equilibrium(blocks[0] if calls == 1 else placed(scenes), p.t0)
+        init, ok, off = _equilibrium(blocks[0] if calls == 1 else placed(scenes), p.t0)
+        warn_unresolved(scenes, off, n)
         failed = np.flatnonzero(~np.all(np.asarray(ok), axis=1))
         failed = failed[failed < n]  # not the repeated last member's copies
         if failed.size:

@@ -634,6 +634,38 @@ def _warn_unresolved(line: Line, scale):
 RESOLUTION_TOL = 5e-2
 
 
+def resolution_checked(line: Line, env) -> bool:
+    """Whether :func:`check_resolution` applies to ``line`` by its structure: a
+    Hermite line of equal elements (``element.mesh`` None; a mesh graded by
+    :func:`touchdown_mesh` has its own check) in an environment with a seabed."""
+    from ..element.hermite import HermiteElement
+
+    return env.seabed is not None and isinstance(line.element, HermiteElement) and line.element.mesh is None
+
+
+def resolution_offsets(line: Line, env, st, t=0.0):
+    """``(off, ref)``: ``ref`` the (2,) end tensions (A, B) [N] of the linear
+    element at :data:`FINE_SEGMENTS` segments per element, ``off`` the relative
+    differences of ``st``'s from them, each over the fine line's own value (at
+    least 1e-3 of its larger end tension); ``off`` NaN where the comparison
+    does not apply (``st`` not converged or not on the bed, or the
+    fine solve not converged). Traceable: what :func:`check_resolution`
+    measures, and what ensembles run for all members at once (vmapped)."""
+    from .fem import line_statics
+
+    fine = line_statics(_fine_linear(line), env, t, throw=False)
+    return _relative_offsets(st.tension_a, st.tension_b, st.converged & (st.grounded_length > 0.0),
+                             fine.tension_a, fine.tension_b, fine.converged)
+
+
+@jax.jit
+def _relative_offsets(ta, tb, ok, fine_a, fine_b, fine_ok):
+    """:func:`resolution_offsets`' arithmetic (one small program outside jit)."""
+    ours, ref = jnp.stack([ta, tb]), jnp.stack([fine_a, fine_b])
+    off = jnp.abs(ours - ref) / jnp.maximum(ref, 1e-3 * jnp.max(ref))
+    return jnp.where(ok & fine_ok, off, jnp.nan), ref
+
+
 def check_resolution(line: Line, env, st, t=0.0) -> float | None:
     """Warn where a grounded line of equal Hermite elements does not resolve
     its touchdown; returns the relative end-tension difference it measured
@@ -650,36 +682,32 @@ def check_resolution(line: Line, env, st, t=0.0) -> float | None:
     follow a kink; one more static solve, compiled once per segment count) and
     warns (:class:`UnresolvedTouchdownWarning`) where an end tension differs by
     more than :data:`RESOLUTION_TOL` of its own value (at least 1e-3 of the
-    larger end tension).
+    larger end tension): :func:`resolution_offsets`.
 
-    Applies only to values (not under ``jit``/``vmap``), to Hermite lines of
-    equal elements (``element.mesh`` None: a mesh graded by
-    :func:`touchdown_mesh` has its own check) on a seabed whose solution
+    Applies only to values (not under ``jit``/``vmap``; ensembles run
+    :func:`resolution_offsets` batched and warn once per line, naming the
+    members), to the lines of :func:`resolution_checked`, where their solution
     converged and rests on the bed.
     """
     import warnings
 
     from .._checks import _concrete
-    from ..element.hermite import HermiteElement
-    from .fem import line_statics
 
-    if (env.seabed is None or not isinstance(line.element, HermiteElement) or line.element.mesh is not None
-            or any(_concrete(x) is None for x in (st.converged, st.grounded_length, st.tension_a))):
+    if not resolution_checked(line, env) or any(
+            _concrete(x) is None for x in (st.converged, st.grounded_length, st.tension_a)):
         return None
     if not bool(st.converged) or not float(st.grounded_length) > 0.0:
         return None
-    fine = line_statics(_fine_linear(line), env, t, throw=False)
-    if not bool(fine.converged):
+    off, ref = (np.asarray(x) for x in resolution_offsets(line, env, st, t))
+    if not np.all(np.isfinite(off)):  # the fine solve did not converge
         return None
-    ours = np.array([float(st.tension_a), float(st.tension_b)])
-    ref = np.array([float(fine.tension_a), float(fine.tension_b)])
-    off = np.abs(ours - ref) / np.maximum(ref, 1e-3 * ref.max())
     worst = int(np.argmax(off))
     if off[worst] > RESOLUTION_TOL:
         n = line.n_segments
+        ours = float((st.tension_a, st.tension_b)[worst])
         warnings.warn(
             f"line {line.label}: {n} equal Hermite elements do not resolve its touchdown: end "
-            f"{'AB'[worst]}'s static tension {ours[worst]:.6g} N differs by {100 * off[worst]:.3g} % from "
+            f"{'AB'[worst]}'s static tension {ours:.6g} N differs by {100 * off[worst]:.3g} % from "
             f"the linear element's at {FINE_SEGMENTS * n} segments ({ref[worst]:.6g} N). Grade the "
             f"elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; CLI: --hermite-mesh "
             f"touchdown) or use more elements.", UnresolvedTouchdownWarning, stacklevel=3)
