@@ -214,6 +214,8 @@ def _body_equilibrium(scene_d, t, loads, tol, max_iterations):
     """The Newton iteration on constants (``lax`` loops are not reverse-
     differentiable); the poses' derivatives come from the implicit function
     theorem at the solution (see the end)."""
+    # ``states``: each line's warm start at the poses (a linear line's state; a
+    # Hermite line's static unknowns, replaced below by its state)
     poses, states, lines_ok, converged, jac, g, wrench = _body_newton(
         _stop_gradient(scene_d), jax.lax.stop_gradient(t), loads, tol, max_iterations)
     # the imbalance, the lines' wrench and states at the poses come from the
@@ -301,9 +303,10 @@ def _body_newton(scene, t, loads, tol, max_iterations):
     body solves the lines' statics once (warm, linearised for the Jacobian) at a
     trial pose: accepted trials become the base of the next Newton step, rejected
     ones halve the step. One traced copy of the warm line statics keeps the
-    compile small (XLA inlines every copy). Returns (poses, line states and
-    whether each line's solve converged there, converged, Jacobian at the
-    poses, and the imbalance and the lines' wrench there)."""
+    compile small (XLA inlines every copy). Returns (poses, the lines' warm
+    starts there (``LineStatics.warm_start``) and whether each line's solve
+    converged there, converged, Jacobian at the poses, and the imbalance and
+    the lines' wrench there)."""
     nb = len(scene.bodies)
     n_dof = 6 * nb
     eye = jnp.eye(n_dof).reshape((n_dof,) + (nb, 6))
@@ -319,7 +322,7 @@ def _body_newton(scene, t, loads, tol, max_iterations):
         jac = jax.vmap(jvp_fn)(eye).reshape(n_dof, n_dof).T
         ok = jnp.all(jnp.stack([s.converged for s in st]))
         tens = jnp.max(jnp.stack([jnp.max(jnp.abs(s.tensions)) for s in st]))
-        return g, jac, _states(st), ok, tens, st, w
+        return g, jac, tuple(s.warm_start() for s in st), ok, tens, st, w
 
     poses0 = jnp.zeros((nb, 6))
     inits0 = line_starts(scene, poses0, t)  # the first trial solves from here

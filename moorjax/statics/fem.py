@@ -55,6 +55,11 @@ class LineStatics(eqx.Module):
         rest_state: the state at rest of an element whose state is more than node
             positions (a Hermite line's :class:`~moorjax.element.hermite_motion.HermiteState`,
             with its slopes), else ``None``.
+        dofs: the static unknowns themselves where they are more than the state
+            holds (a Hermite line's :class:`~moorjax.element.hermite.HermiteDofs`:
+            positions, slopes and tension field of Wu's equilibrium, which its
+            ``rest_state``, the strain closure's equilibrium, does not keep),
+            else ``None``.
     """
 
     positions: Array
@@ -68,6 +73,16 @@ class LineStatics(eqx.Module):
     iterations: Array
     max_residual: Array
     rest_state: Any = None
+    dofs: Any = None
+
+    def warm_start(self):
+        """What a static solve of the same line nearby starts from (``init``):
+        the unknowns where they are kept (:attr:`dofs`), else :meth:`state`.
+        A Hermite line started again from its ``rest_state`` (slopes and the
+        tension field rebuilt from the closure's shape) failed on 2 of 7 drawn
+        grounded lines (extensibility residual up to 855 of the element
+        length), so a body scene on them could not start."""
+        return self.dofs if self.dofs is not None else self.state()
 
     def state(self):
         """The equilibrium as a dynamic state (free nodes at rest; ``rest_state``

@@ -130,16 +130,18 @@ def _assemble(line, ra, rb, y):
 
 
 def _start(line, env, t, init, ra, rb) -> HermiteDofs:
-    """A start from ``init``: :class:`HermiteDofs` as given; from a
-    :class:`HermiteState` (a neighbouring solution's state, e.g. a system's
-    previous Newton iterate) the one of it (its ends at ``ra``, ``rb``, the
-    field λ of its stretch) and the catenary guess whose residual is smaller: an
-    end moved by metres kinks the end element of the old shape (measured: a
-    free point's 5 m step on a taut 4-element line, started from the old state,
-    diverged or reached a folded equilibrium)."""
-    if not isinstance(init, HermiteState):
-        return init
-    mine = _from_state(line, init, ra, rb)
+    """A start from ``init``, with its ends at ``ra``, ``rb``: from
+    :class:`HermiteDofs` (a neighbouring static solution's unknowns,
+    ``LineStatics.warm_start``, e.g. a body iteration's previous pose) or from a
+    :class:`HermiteState` (a dynamic state: the field λ of its stretch), the one
+    of it and the catenary guess whose residual is smaller: an end moved by
+    metres kinks the end element of the old shape (measured: a free point's 5 m
+    step on a taut 4-element line, started from the old state, diverged or
+    reached a folded equilibrium)."""
+    if isinstance(init, HermiteState):
+        mine = _from_state(line, init, ra, rb)
+    else:
+        mine = HermiteDofs(r=init.r.at[0].set(ra).at[-1].set(rb), dr=init.dr, lam=init.lam)
     guess = hermite_guess(line, env, t)
     k = line.line_type.axial.nominal_ea() / line.segment_length
 
@@ -460,6 +462,7 @@ def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
         iterations=steps,
         max_residual=res,
         rest_state=static_state(line, closure_equilibrium(line, env, dofs, t)),
+        dofs=dofs,
     )
 
 

@@ -100,7 +100,7 @@ def line_starts(scene, poses, t):
     def one(ln):
         if element_core(ln) is _solve_core:
             return initial_guess(ln, scene.env, t)
-        return element_core(ln)(ln, scene.env, t, None, RTOL, ATOL, MAX_STEPS).state()
+        return element_core(ln)(ln, scene.env, t, None, RTOL, ATOL, MAX_STEPS).warm_start()
 
     return map_lines(one, _attached(scene, poses))
 
@@ -341,7 +341,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
     scale = None
     converged = False
     it = 0
-    inits = tuple(s.state() for s in line_statics_at(scene, poses, t, None, methods))
+    inits = tuple(s.warm_start() for s in line_statics_at(scene, poses, t, None, methods))
     stalls = 0
     for it in range(1, max_iterations + 1):
         g, jac = _newton_parts(scene, poses, t, bool(loads), inits, methods)
@@ -382,7 +382,7 @@ def _system_newton(scene, poses, t, loads, tol, max_iterations, methods) -> Syst
             break
         stalls = stalls + 1 if bool(stalled(step, size, np.max(np.abs(g_trial)))) else 0
         poses = trial
-        inits = tuple(x.state() for x in new)
+        inits = tuple(x.warm_start() for x in new)
         if bool(jnp.any(sunk_bodies(scene, poses))) or stalls >= STALLS:  # no equilibrium reached
             break
     st = line_statics_at(scene, poses, t, inits, methods)
@@ -432,7 +432,7 @@ def offset_curve(scene, offsets, dof: int = 0, body: int = 0, t=0.0) -> Array:
                                f"offset {x:g} of dof {dof}")
         ends = [(s.force_a, s.force_b) for s in st]
         f = -jnp.stack(mooring_wrenches(scene.lines, scene.bodies, list(p), ends))[body, dof]
-        return float(f), tuple(s.state() for s in st)
+        return float(f), tuple(s.warm_start() for s in st)
 
     f0, base = solve(0.0, None)
     out = np.empty(offsets.shape)
