@@ -206,12 +206,18 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
     if restart is not None:
         # once, not per step (a cond on a vmapped count runs both sides)
         f_restart, tol_restart = fn(restart, None), tol(restart)
+        # a start that is the restart itself (a body iteration's first trial
+        # starts from the catenary guess) keeps all its steps: a slack line
+        # piled on the bed crawls, and restarting it from where it began halved
+        # them (its solve failed at a point scene's deck pose, where it
+        # converges from no start)
+        differs = jnp.any(restart != y0)
 
     def body(c):
         # tol(y) is carried: the force scale it needs is computed once per iterate
         y, fy, tol_y, it, _, within_before = c
         if restart is not None:
-            now = it == max_steps // 2
+            now = (it == max_steps // 2) & differs
             y, fy = jnp.where(now, restart, y), jnp.where(now, f_restart, fy)
             tol_y = jnp.where(now, tol_restart, tol_y)
             within_before = within_before & jnp.invert(now)
