@@ -168,6 +168,13 @@ def _dense_step(fn, y, fy, mu):
     return jnp.linalg.solve(mu * jnp.eye(m) - jac, fy.reshape(-1)).reshape(y.shape)
 
 
+#: steps of the descent from a warm start before it restarts from the catenary
+#: guess (at most half the limit): half the old limit of 500. A warm start that
+#: crawls is left early (MoorDyn's ``seafloor.txt`` pendulum, below, fails to
+#: balance its point when the restart waits for 1000 of 2000 steps)
+RESTART_STEPS = 250
+
+
 def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None, small=None):
     """Regularised Newton with an exact line search on the static energy.
 
@@ -192,9 +199,9 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
     repeated for ever.
 
     ``restart`` (a start like ``y0``, or None): where ``y0`` has not converged in
-    half the steps, the rest start from it. A warm start (a neighbouring
-    solution: the system statics' previous pose) can sit where the descent
-    crawls; the catenary guess then converges (MoorDyn's ``seafloor.txt``
+    :data:`RESTART_STEPS` steps (or half the steps), the rest start from it. A
+    warm start (a neighbouring solution: the system statics' previous pose) can
+    sit where the descent crawls; the catenary guess then converges (MoorDyn's ``seafloor.txt``
     pendulum: a weightless slack line of EA = 1e9 N, taut at 1e-10 strain below a
     kink, failed from its last shape at most trial poses and converged from the
     guess).
@@ -217,7 +224,7 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
         # tol(y) is carried: the force scale it needs is computed once per iterate
         y, fy, tol_y, it, _, within_before = c
         if restart is not None:
-            now = (it == max_steps // 2) & differs
+            now = (it == min(max_steps // 2, RESTART_STEPS)) & differs
             y, fy = jnp.where(now, restart, y), jnp.where(now, f_restart, fy)
             tol_y = jnp.where(now, tol_restart, tol_y)
             within_before = within_before & jnp.invert(now)
@@ -318,7 +325,13 @@ def check_geometry(line, env, t):
 
 
 #: Default tolerances of the static solve (see :func:`solve_line_statics`).
-RTOL, ATOL, MAX_STEPS = 1e-10, 1e-8, 500
+RTOL, ATOL = 1e-10, 1e-8
+#: The linear element's default step limit of the descent (``max_steps=None``;
+#: other elements have their own: the Hermite statics' Newton takes 500). A
+#: line longer than its anchor's L-shaped path to the fairlead piles on the bed
+#: and its slack segments move a little per step: drawn point scenes' lines at 80
+#: segments took 438–656 steps (500 before session 40: their body starts failed).
+MAX_STEPS = 2000
 
 
 def solve_line_statics(
@@ -329,7 +342,7 @@ def solve_line_statics(
     *,
     rtol: float = RTOL,
     atol: float = ATOL,
-    max_steps: int = MAX_STEPS,
+    max_steps: int | None = None,
     throw: bool = True,
     method: str = "fem",
 ) -> LineStatics:
@@ -360,7 +373,8 @@ def solve_line_statics(
             residual (forces / (EA/l), in m). The result is ``converged`` when
             the largest free-node force imbalance is below 1e-6 of the largest
             tension (or of one segment's weight), or at float64 resolution.
-        max_steps: iteration limit of the descent.
+        max_steps: iteration limit of the descent (None: the element's own,
+            :data:`MAX_STEPS` for the linear element).
         throw: raise ``RuntimeError`` if Newton fails (otherwise inspect
             ``converged``).
 
@@ -381,7 +395,7 @@ def solve_line_statics(
     return out
 
 
-def line_statics(line, env, t=0.0, init=None, *, rtol=RTOL, atol=ATOL, max_steps=MAX_STEPS,
+def line_statics(line, env, t=0.0, init=None, *, rtol=RTOL, atol=ATOL, max_steps=None,
                  throw=True, method="fem") -> LineStatics:
     """:func:`solve_line_statics` without its check of a Hermite line's
     resolution (what :func:`moorjax.statics.hermite.touchdown_mesh` calls
@@ -496,6 +510,7 @@ def _implicit(r_free, line, env, t):
 @functools.partial(StoredProgram, compile_for="once")  # as _exact_core
 def _solve_core(line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve: compiled once per line structure, reused for any values."""
+    max_steps = MAX_STEPS if max_steps is None else max_steps
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     r0 = initial_guess(line, env, t).r if init is None else init.r
     # A regularised Newton descent on the static energy (``_descent``) finds the
@@ -521,7 +536,7 @@ def _solve_core(line, env, t, init, rtol, atol, max_steps):
         return jnp.all(jnp.abs(dy) <= atol + rtol * jnp.abs(y))
 
     banded = line.banded_jacobian
-    # from ``init``, the catenary guess once half the steps did not converge
+    # from ``init``, the catenary guess once RESTART_STEPS did not converge
     restart = None if init is None else lax.stop_gradient(initial_guess(line, env, t).r)
     r_found, steps = _descent(fn, lax.stop_gradient(r0), tol, max_steps, line.segment_length,
                               _band_step if banded else _dense_step, restart, small)

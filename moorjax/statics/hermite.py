@@ -44,13 +44,13 @@ def _linear_guess(line: Line, env, t, per_element=2) -> HermiteDofs:
     tension field from the mean of the adjacent segments' tensions. At two per
     element (equal elements) its nodes are the Hermite nodes and midpoints."""
     from ..element.linear import LinearElement
-    from .fem import ATOL, MAX_STEPS, RTOL, _solve_core
+    from .fem import ATOL, RTOL, _solve_core
 
     n = line.n_segments
     m = per_element * n
     fine = Line(line.line_type, line.length, m, line.end_a, line.end_b,
                 element=LinearElement(), label=line.label)
-    st = _solve_core(fine, env, t, None, RTOL, ATOL, MAX_STEPS)
+    st = _solve_core(fine, env, t, None, RTOL, ATOL, None)
     p, tens = st.positions, st.tensions
     step = 2.0 * fine.segment_length
     inner = (p[2:] - p[:-2]) / step
@@ -181,8 +181,12 @@ def _from_state(line, init, ra, rb) -> HermiteDofs:
 GUESS_SEGMENTS = (2, 8)
 
 
+#: the Hermite statics' default Newton step limit (``max_steps=None``)
+NEWTON_STEPS = 500
+
+
 def hermite_equilibrium(line: Line, env, t=0.0, init: HermiteDofs | None = None, *,
-                        rtol=1e-10, atol=1e-8, max_steps=500):
+                        rtol=1e-10, atol=1e-8, max_steps=NEWTON_STEPS):
     """The static unknowns (:class:`HermiteDofs`) and Newton's step count.
 
     Without ``init``: from the catenary guess (:func:`hermite_guess`), or with a
@@ -445,6 +449,7 @@ def _closure_residual(line, env, t, lam):
 @functools.partial(StoredProgram, compile_for="once")
 def hermite_statics_core(line: Line, env, t, init, rtol, atol, max_steps):
     """The jitted static solve of a Hermite line; returns a ``LineStatics``."""
+    max_steps = NEWTON_STEPS if max_steps is None else max_steps
     env = env.without_waves()  # statics: the mean state, waves ignored (as MoorDyn's IC)
     from .fem import LineStatics
 

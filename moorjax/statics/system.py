@@ -28,7 +28,7 @@ from ..body.coupling import attach, mooring_wrenches
 from ..body.point import ConnectionPoint
 from ..model.grouping import map_lines
 from .exact import catenary_eligible, catenary_solves
-from .fem import (ATOL, MAX_STEPS, RTOL, LineStatics, _exact_core, _solve_core, check_geometry,
+from .fem import (ATOL, RTOL, LineStatics, _exact_core, _solve_core, check_geometry,
                   element_core, initial_guess)
 
 
@@ -81,8 +81,8 @@ def line_statics_at(scene, poses, t, inits=None, methods=None):
 
     def one(ln, init, method):
         if method == "catenary":
-            return _exact_core(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS, False)
-        return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, MAX_STEPS)
+            return _exact_core(ln, scene.env, t, init, RTOL, ATOL, None, False)
+        return element_core(ln)(ln, scene.env, t, init, RTOL, ATOL, None)
 
     # lines of one structure (and method) solve as one vmapped call: one traced
     # copy of the solve per structure, not per line (moorjax.model.grouping)
@@ -100,7 +100,7 @@ def line_starts(scene, poses, t):
     def one(ln):
         if element_core(ln) is _solve_core:
             return initial_guess(ln, scene.env, t)
-        return element_core(ln)(ln, scene.env, t, None, RTOL, ATOL, MAX_STEPS).warm_start()
+        return element_core(ln)(ln, scene.env, t, None, RTOL, ATOL, None).warm_start()
 
     return map_lines(one, _attached(scene, poses))
 
