@@ -79,9 +79,9 @@ class LineStatics(eqx.Module):
         """What a static solve of the same line nearby starts from (``init``):
         the unknowns where they are kept (:attr:`dofs`), else :meth:`state`.
         A Hermite line started again from its ``rest_state`` (slopes and the
-        tension field rebuilt from the closure's shape) failed on 2 of 7 drawn
-        grounded lines (extensibility residual up to 855 of the element
-        length), so a body scene on them could not start."""
+        tension field rebuilt from the closure's shape) failed on 8 of the 199
+        drawn lines of ``tests/test_hermite_statics_property.py`` that converge
+        cold, and body scenes on such lines could not start."""
         return self.dofs if self.dofs is not None else self.state()
 
     def state(self):
