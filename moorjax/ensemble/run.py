@@ -115,7 +115,8 @@ def warn_unresolved(scenes, off, members=None):
     line whose touchdown offsets ``off`` ((members, lines, 2), from the batched
     statics) exceed :data:`~moorjax.statics.hermite.RESOLUTION_TOL` in some
     members (of the first ``members``; default all), naming them."""
-    from ..statics.hermite import FINE_SEGMENTS, RESOLUTION_TOL, UnresolvedTouchdownWarning
+    from ..statics.hermite import (FINE_SEGMENTS, RESOLUTION_ADVICE, RESOLUTION_TOL,
+                                   UnresolvedTouchdownWarning)
 
     if off is None:
         return
@@ -131,9 +132,7 @@ def warn_unresolved(scenes, off, members=None):
             f"line {line.label}: {n} equal Hermite elements do not resolve its touchdown in "
             f"{bad.size} of {off.shape[0]} ensemble members {shown}: their static end tensions differ "
             f"by up to {100 * worst[bad, j].max():.3g} % from the linear element's at {FINE_SEGMENTS * n} "
-            f"segments. Grade the elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; "
-            f"CLI: --hermite-mesh touchdown) or use more elements.", UnresolvedTouchdownWarning,
-            stacklevel=3)
+            f"segments. {RESOLUTION_ADVICE}", UnresolvedTouchdownWarning, stacklevel=3)
 
 
 def _check_members(scenes, t0):

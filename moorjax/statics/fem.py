@@ -201,8 +201,8 @@ def _descent(fn, y0, tol, max_steps, soft_length, step=_band_step, restart=None,
     ``restart`` (a start like ``y0``, or None): where ``y0`` has not converged in
     :data:`RESTART_STEPS` steps (or half the steps), the rest start from it. A
     warm start (a neighbouring solution: the system statics' previous pose) can
-    sit where the descent crawls; the catenary guess then converges (MoorDyn's ``seafloor.txt``
-    pendulum: a weightless slack line of EA = 1e9 N, taut at 1e-10 strain below a
+    sit where the descent crawls; the catenary guess then converges (MoorDyn's
+    ``seafloor.txt`` pendulum: a weightless slack line of EA = 1e9 N, taut at 1e-10 strain below a
     kink, failed from its last shape at most trial poses and converged from the
     guess).
     """

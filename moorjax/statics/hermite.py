@@ -642,6 +642,11 @@ def _warn_unresolved(line: Line, scale):
 RESOLUTION_TOL = 5e-2
 
 
+#: what :func:`check_resolution`'s warning (and an ensemble's) tells the user to do
+RESOLUTION_ADVICE = ("Grade the elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; CLI: "
+                     "--hermite-mesh touchdown) or use more elements.")
+
+
 def resolution_checked(line: Line, env) -> bool:
     """Whether :func:`check_resolution` applies to ``line`` by its structure: a
     Hermite line of equal elements (``element.mesh`` None; a mesh graded by
@@ -716,9 +721,8 @@ def check_resolution(line: Line, env, st, t=0.0) -> float | None:
         warnings.warn(
             f"line {line.label}: {n} equal Hermite elements do not resolve its touchdown: end "
             f"{'AB'[worst]}'s static tension {ours:.6g} N differs by {100 * off[worst]:.3g} % from "
-            f"the linear element's at {FINE_SEGMENTS * n} segments ({ref[worst]:.6g} N). Grade the "
-            f"elements at the touchdown (moorjax.statics.hermite.touchdown_mesh; CLI: --hermite-mesh "
-            f"touchdown) or use more elements.", UnresolvedTouchdownWarning, stacklevel=3)
+            f"the linear element's at {FINE_SEGMENTS * n} segments ({ref[worst]:.6g} N). {RESOLUTION_ADVICE}",
+            UnresolvedTouchdownWarning, stacklevel=3)
     return float(off[worst])
 
 
