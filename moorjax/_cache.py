@@ -235,7 +235,8 @@ class StoredProgram:
         self.fn = fn
         self.storable = storable
         #: what XLA compiles the program for (:func:`moorjax._xla_flags.compiler_options`):
-        #: ``"runs"`` (a time integration, run many times), ``"once"`` (a static
+        #: ``"runs"`` (a time integration, run many times), ``"members"`` (the
+        #: same, vmapped over an ensemble's members), ``"once"`` (a static
         #: solve, run once per structure: compiled faster, runs slower) or ``None``
         #: (XLA's defaults). Only a call outside any trace takes them: under a
         #: caller's ``jit``/``grad``/``vmap`` the caller's program is what compiles.

@@ -146,8 +146,19 @@ def prefer_one_intra_op_thread() -> bool:
 #: beyond it. Per program, not in ``XLA_FLAGS``: the user's own programs keep
 #: XLA's defaults, and an option a jaxlib does not know fails the compile with
 #: an error (:func:`reject_options`) where an unknown flag would end the process.
+#:
+#: ``"members"`` is ``"runs"`` for a program vmapped over an ensemble's members:
+#: there XLA:CPU (jaxlib 0.10) hands the batched reductions and small products
+#: ((members, nodes, 3) sums over the last axis, the band's block products) to
+#: YNNPACK library calls, 22 ``__ynn_fusion`` thunks per step of ``oc3_catenary``
+#: at N = 20, which cost more than XLA's own loops at these sizes; an empty
+#: ``xla_cpu_experimental_ynn_fusion_type`` keeps them in XLA. 50 members on one
+#: device, 20 s: 1.12 -> 0.92 s (27.7 -> 22.9 µs per member and step); single
+#: runs have no such fusions and keep ``"runs"`` (``benchmarks/README.md``,
+#: session 41).
 PRESETS = {
     "runs": (("xla_cpu_use_fusion_emitters", False),),
+    "members": (("xla_cpu_use_fusion_emitters", False), ("xla_cpu_experimental_ynn_fusion_type", "")),
     "once": (("xla_cpu_use_fusion_emitters", False), ("xla_backend_optimization_level", 0)),
 }
 

@@ -106,6 +106,8 @@ def test_compiler_option_presets_and_their_switches(monkeypatch):
     assert _xla_flags.compiler_options("runs") == {"xla_cpu_use_fusion_emitters": False}
     assert _xla_flags.compiler_options("once") == {"xla_cpu_use_fusion_emitters": False,
                                                    "xla_backend_optimization_level": 0}
+    assert _xla_flags.compiler_options("members") == {"xla_cpu_use_fusion_emitters": False,
+                                                      "xla_cpu_experimental_ynn_fusion_type": ""}
     for name in ("MOORJAX_XLA_TUNING", "MOORJAX_XLA_OPTIONS"):
         monkeypatch.setenv(name, "off")
         assert _xla_flags.compiler_options("runs") is None
@@ -197,3 +199,45 @@ def test_one_intra_op_thread_unless_the_user_or_a_platform_says_otherwise():
     assert _nproc_after("import moorjax", JAX_PLATFORMS="cuda") is None
     assert _nproc_after("import moorjax", JAX_PLATFORMS="cpu") == "1"
     assert _nproc_after("import jax.numpy as jnp; jnp.ones(2).block_until_ready(); import moorjax") is None
+
+
+def test_batched_programs_keep_small_reductions_out_of_library_calls():
+    """An ensemble's programs are compiled for ``"members"``: vmapped, XLA:CPU
+    (jaxlib 0.10) hands some of their reductions and block products to YNNPACK
+    library calls, slower at these sizes (``moorjax._xla_flags``, PRESETS). The
+    batched integration of 10 members at N = 20 holds such calls when compiled
+    for ``"runs"`` and none when compiled for ``"members"``."""
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    from moorjax.dynamics.simulate import plan
+    from moorjax.ensemble import run as ens_run
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+
+    assert ens_run._batched_integrate.compile_for == "members"
+    assert ens_run._batched_equilibrium.compile_for == "members"
+    options = {name: _xla_flags.compiler_options(name) for name in ("runs", "members")}
+    if None in options.values():
+        pytest.skip("moorjax's XLA options are switched off here")
+    n_members, segments = 10, 20
+    scene = build_scene(read_deck(example_path("oc3_catenary")), segments=segments)
+    stacked = jax.tree_util.tree_map(lambda x: jnp.stack([x] * n_members), scene)
+    stacked = eqx.tree_at(lambda s: s.lines[0].line_type.drag.cd_normal, stacked,
+                          jnp.linspace(1.2, 2.0, n_members))
+    y0 = (jax.ShapeDtypeStruct((n_members, segments - 1, 6), jnp.float64),)
+    settings = plan(0.5, scene=scene)
+    fusions = {}
+    for name, opts in options.items():
+        program = jax.jit(lambda s, y: ens_run._vmapped_integrate(s, y, settings), compiler_options=opts)
+        try:
+            text = program.lower(stacked, y0).compile().as_text()
+        except Exception as exc:  # another jaxlib: moorjax then drops its options (reject_options)
+            if "No such compile option" in str(exc):
+                pytest.skip(f"this jaxlib does not take the options: {exc}")
+            raise
+        assert "fusion" in text
+        fusions[name] = text.count("__ynn_fusion")
+    assert fusions["members"] == 0, fusions
+    print("library fusions:", fusions)

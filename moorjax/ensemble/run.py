@@ -66,7 +66,7 @@ def _vmapped_integrate(scenes, y0, settings):
 #: the batched integration, stored by structure like ``simulate``'s (a new process
 #: running an ensemble of the same structure and member count loads it)
 _batched_integrate = StoredProgram(_vmapped_integrate, storable=storable_run, sharded=True,
-                                 compile_for="runs")
+                                 compile_for="members")
 
 
 def _traced_equilibrium(scene, t0):
@@ -80,7 +80,7 @@ def _vmapped_equilibrium(scenes, t0):
 
 
 #: the batched statics, stored by structure too (tracing it costs about 2.5 s)
-_batched_equilibrium = StoredProgram(_vmapped_equilibrium, sharded=True, compile_for="runs")
+_batched_equilibrium = StoredProgram(_vmapped_equilibrium, sharded=True, compile_for="members")
 
 
 def equilibrium(scenes, t0: float = 0.0):
