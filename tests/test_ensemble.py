@@ -193,9 +193,15 @@ SHARDED = textwrap.dedent(
     shards = len(a.tension_b.sharding.device_set) if hasattr(a.tension_b, "sharding") else 1
     b = simulate_ensemble(members, t.DURATION, devices=None, **fast)
     c = simulate_ensemble(members, t.DURATION, devices="all", members_per_call=4, **fast)  # 2 calls
+    # adaptive steps: each device runs its own members' time loop (shard_map);
+    # every member takes the steps it takes alone
+    d = simulate_ensemble(members, t.DURATION, devices="all", dt_out=0.1)
+    e = simulate_ensemble(members, t.DURATION, devices=None, dt_out=0.1)
     print(json.dumps(dict(shape=list(a.tension_b.shape), devices=shards,
         diff=float(np.max(np.abs(np.asarray(a.tension_b) - np.asarray(b.tension_b)))),
         diff_calls=float(np.max(np.abs(np.asarray(c.tension_b) - np.asarray(b.tension_b)))),
+        diff_adaptive=float(np.max(np.abs(np.asarray(d.tension_b) - np.asarray(e.tension_b)))),
+        steps=[np.asarray(d.num_steps).tolist(), np.asarray(e.num_steps).tolist()],
         scale=float(np.max(np.abs(np.asarray(b.tension_b)))))))
     """
 )
@@ -211,6 +217,8 @@ def test_sharded_over_four_cpu_devices_equals_unsharded():
     assert out["devices"] == 4
     assert out["diff"] <= 1e-10 * out["scale"]
     assert out["diff_calls"] <= 1e-10 * out["scale"]
+    assert out["diff_adaptive"] <= 1e-10 * out["scale"]
+    assert out["steps"][0] == out["steps"][1] and len(set(out["steps"][0])) > 1, out["steps"]
 
 
 def test_cli_ensemble_summary_and_bad_vary(tmp_path, capsys):
