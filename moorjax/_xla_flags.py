@@ -131,6 +131,35 @@ def prefer_one_intra_op_thread() -> bool:
     if not platforms and _accelerator_plugin():
         return False
     os.environ[NPROC] = "1"
+    _ours[NPROC] = "1"
+    return True
+
+
+_ours = {}  # the environment values moorjax itself set (never a user's)
+
+
+def pool_for_devices(n_devices: int) -> bool:
+    """Give XLA:CPU's task pool ``n_devices + 1`` threads when ``n_devices`` CPU
+    devices run at once (an ensemble's, :func:`moorjax.ensemble.use_cpu_cores`),
+    where moorjax set ``PJRT_NPROC`` itself (:func:`prefer_one_intra_op_thread`)
+    and no JAX backend has started.
+
+    Each device runs its programs on that pool, and jaxlib 0.10's batched LAPACK
+    kernels (Hermite lines, bodies) block a pool thread until chunks they queue
+    on the same pool are done. One program orders its batched calls
+    (:mod:`moorjax.linalg.ordering`), but the devices' programs run side by side:
+    with as many threads as devices, every thread can wait in such a kernel and
+    the process hangs (seen: ``moorjax ensemble --element hermite`` on two CPU
+    devices, both pool threads in ``jax::ParallelBatchMap``). One thread more
+    than devices always leaves one to run the chunks.
+
+    Returns:
+        True when ``PJRT_NPROC`` was changed by this call.
+    """
+    if (n_devices < 2 or _ours.get(NPROC) is None or os.environ.get(NPROC) != _ours[NPROC]
+            or _backend_started()):
+        return False
+    os.environ[NPROC] = _ours[NPROC] = str(int(n_devices) + 1)
     return True
 
 

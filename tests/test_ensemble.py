@@ -258,7 +258,7 @@ CORES = textwrap.dedent(
     import json, os
     import moorjax
     from moorjax.ensemble import available_cores, use_cpu_cores
-    out = dict(cores=available_cores(), asked=use_cpu_cores(3))
+    out = dict(cores=available_cores(), asked=use_cpu_cores(3), pool=os.environ.get("PJRT_NPROC"))
     try:
         use_cpu_cores(0)
     except ValueError as exc:
@@ -274,13 +274,14 @@ CORES = textwrap.dedent(
 
 
 def test_use_cpu_cores_before_and_after_jax_starts():
-    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "PJRT_NPROC")}
     proc = subprocess.run([sys.executable, "-c", CORES], capture_output=True, text=True,
                           timeout=300, env=env)
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out["cores"] >= 1
     assert out["asked"] == 3 and out["devices"] == 3
+    assert out["pool"] == "4"  # one pool thread more than devices (batched LAPACK kernels)
     assert "must be >= 1" in out["zero"]
     assert out["after"] == 3 and out["devices_after"] == 3  # fixed once JAX has run
     # a count the user set in XLA_FLAGS is kept when none is asked for
@@ -364,3 +365,88 @@ def test_members_beyond_one_call_run_as_calls_of_one_program():
     np.testing.assert_array_equal(np.asarray(parts.num_steps), np.asarray(whole.num_steps))
     with pytest.raises(ValueError, match="members_per_call"):
         simulate_ensemble(members, DURATION, members_per_call=0, **fast)
+
+
+POOL = textwrap.dedent(
+    """
+    import os, sys
+    import moorjax
+    from moorjax.ensemble import use_cpu_cores
+    print(os.environ.get("PJRT_NPROC"), use_cpu_cores(2, lapack=sys.argv[1] == "1"),
+          os.environ.get("PJRT_NPROC"))
+    """
+)
+
+
+def test_the_task_pool_outnumbers_the_devices_only_where_lapack_may_run():
+    """moorjax sets PJRT_NPROC=1 at import; asking for several devices for
+    ensembles that may call batched LAPACK kernels raises it to devices + 1, a
+    user's own value is kept, and ensembles of plain linear-element lines keep
+    the pool as it is (faster)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "PJRT_NPROC")}
+    for lapack, want in (("1", ["1", "2", "3"]), ("0", ["1", "2", "1"])):
+        proc = subprocess.run([sys.executable, "-c", POOL, lapack], capture_output=True, text=True,
+                              timeout=300, env=env)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        assert proc.stdout.split() == want
+    proc = subprocess.run([sys.executable, "-c", POOL, "1"], capture_output=True, text=True,
+                          timeout=300, env=dict(env, PJRT_NPROC="2"))
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["2", "2", "2"]
+
+
+def test_which_decks_may_call_lapack():
+    from moorjax.cli import build_parser
+    from moorjax.ensemble.cli import _may_call_lapack
+
+    def args(*extra, deck="example:oc3_catenary"):
+        return build_parser().parse_args(["ensemble", deck, "--duration", "1", "--vary", "Cd=1",
+                                          "--out", "x", *extra])
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    assert not _may_call_lapack(args())
+    assert not _may_call_lapack(args("--solver", "heun"))
+    assert _may_call_lapack(args("--element", "hermite"))
+    assert _may_call_lapack(args("--solver", "kvaerno5"))
+    assert _may_call_lapack(args(deck=os.path.join(here, "data", "free_body_buoy.dat")))
+    assert _may_call_lapack(args(deck="no/such/deck.dat"))
+
+
+def test_batched_hermite_states_pack_member_by_member():
+    """An ensemble's start (Hermite states with a member axis) packs into each
+    member's solver array, stacked."""
+    import jax.numpy as jnp
+
+    from moorjax.element.hermite_motion import HermiteState
+
+    rng = np.random.default_rng(3)
+    parts = {k: jnp.asarray(rng.normal(size=(4, n, 3))) for k, n in (("r", 5), ("v", 5), ("d", 7), ("dv", 7))}
+    batched = HermiteState(**parts).packed()
+    each = [HermiteState(**{k: v[i] for k, v in parts.items()}).packed() for i in range(4)]
+    assert batched.shape == (4, 12, 6)
+    np.testing.assert_array_equal(np.asarray(batched), np.stack([np.asarray(e) for e in each]))
+
+
+def test_cli_hermite_ensemble_on_two_cpu_devices_finishes(tmp_path):
+    """`moorjax ensemble --element hermite` on two CPU devices: Hermite lines
+    call batched LAPACK kernels, which on jaxlib 0.10 hung the process with as
+    many pool threads as devices; member 0 equals its single run."""
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "PJRT_NPROC")}
+    out = tmp_path / "h"
+    cmd = [sys.executable, "-m", "moorjax", "ensemble", "example:oc3_catenary", "--element", "hermite",
+           "--segments", "4", "--duration", "1", "--vary", "Cd=1.2,1.4,1.6,2.0", "--cpu-devices", "2",
+           "--out", str(out), "--quiet"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900, env=env)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "on 2 CPU device(s); 0 failed" in proc.stderr
+    import xarray as xr
+
+    ds = xr.open_dataset(out / "ensemble.nc")
+    assert list(ds["status"].values) == ["ok"] * 4
+    single = subprocess.run(
+        [sys.executable, "-m", "moorjax", "ensemble", "example:oc3_catenary", "--element", "hermite",
+         "--segments", "4", "--duration", "1", "--vary", "Cd=1.2", "--cpu-devices", "1",
+         "--out", str(tmp_path / "one"), "--quiet"], capture_output=True, text=True, timeout=900, env=env)
+    assert single.returncode == 0, single.stderr[-3000:]
+    one = xr.open_dataset(tmp_path / "one" / "ensemble.nc")
+    np.testing.assert_allclose(ds["tension_b_max"].values[0], one["tension_b_max"].values[0], rtol=1e-6)

@@ -82,9 +82,10 @@ class HermiteState(eqx.Module):
     dv: Array
 
     def packed(self):
-        """The (2n, 6) solver array: [r, v] rows, then [d, dv] rows."""
+        """The (2n, 6) solver array: [r, v] rows, then [d, dv] rows (with leading
+        member axes where the state has them, as an ensemble's start)."""
         return jnp.concatenate([jnp.concatenate([self.r, self.v], axis=-1),
-                                jnp.concatenate([self.d, self.dv], axis=-1)], axis=0)
+                                jnp.concatenate([self.d, self.dv], axis=-1)], axis=-2)
 
 
 def unpack_hermite(line, q) -> HermiteState:

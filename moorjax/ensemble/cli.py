@@ -36,6 +36,30 @@ def add_parser(subparsers):
     return en
 
 
+def _may_call_lapack(args) -> bool:
+    """Whether the deck's ensemble may call batched LAPACK kernels (see
+    :func:`moorjax.ensemble.use_cpu_cores`), from the deck's text alone (JAX must
+    not start before the devices are set): all but linear-element lines between
+    fixed and coupled points, without bodies or bending, under ``auto``,
+    ``ros34pw2`` or an explicit solver. Unreadable decks count as True (their
+    error comes later, from the loader)."""
+    from .._cli_common import deck_path
+    from ..io import read_deck
+
+    if (args.element or "linear") != "linear":
+        return True
+    if (args.solver or "auto") not in ("auto", "ros34pw2", "euler", "heun", "midpoint", "ralston",
+                                       "bosh3", "tsit5", "dopri5", "dopri8"):
+        return True
+    try:
+        deck = read_deck(deck_path(args.deck))
+    except Exception:  # noqa: BLE001 - reported by the loader
+        return True
+    return bool(deck.bodies
+                or any(p.attachment not in ("fixed", "coupled") for p in deck.points.values())
+                or any(float(lt.ei or 0.0) > 0.0 for lt in deck.line_types.values()))
+
+
 def cmd_ensemble(args) -> int:
     import os
 
@@ -44,7 +68,7 @@ def cmd_ensemble(args) -> int:
     from .store import SUMMARY_STATS, run_chunked
     from .vary import parse_vary, sweep
 
-    use_cpu_cores(args.cpu_devices)  # before JAX computes anything
+    use_cpu_cores(args.cpu_devices, lapack=_may_call_lapack(args))  # before JAX computes anything
 
     varies = [parse_vary(v) for v in args.vary]  # names checked before any work
     if os.path.exists(args.out) and not os.path.isdir(args.out):

@@ -32,11 +32,19 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def use_cpu_cores(n: int | None = None) -> int:
+def use_cpu_cores(n: int | None = None, lapack: bool = True) -> int:
     """Ask JAX for ``n`` CPU devices (default: one per available core).
 
     Args:
         n: number of CPU devices, ≥ 1; ``None`` for :func:`available_cores`.
+        lapack: the ensembles to run may call batched LAPACK kernels (Hermite
+            lines, bodies, free points, bending, implicit solvers other than
+            ROS34PW2 on linear-element lines): with several devices XLA:CPU's
+            task pool then gets one thread more than devices, without which
+            jaxlib 0.10 can hang (:func:`moorjax._xla_flags.pool_for_devices`).
+            ``False`` keeps the pool at its size, which runs ensembles of
+            linear-element lines faster (200 members of ``oc3_catenary``: 4.1
+            against 4.7 s); ``moorjax ensemble`` decides from the deck.
 
     Returns:
         the number of CPU devices JAX will use: ``n``, unless JAX has already
@@ -50,14 +58,22 @@ def use_cpu_cores(n: int | None = None) -> int:
     if n is None:
         chosen = _chosen()
         if chosen:
+            from .._xla_flags import pool_for_devices
+
+            if lapack:
+                pool_for_devices(chosen)
             return chosen
         n = available_cores()
+    from .._xla_flags import pool_for_devices
+
     try:
         jax.config.update("jax_num_cpu_devices", int(n))
     except RuntimeError:  # JAX has computed something: its devices are fixed
         return _current()
     except AttributeError:  # a JAX older than the option: the XLA flag, read when JAX starts
-        return _flagged(int(n))
+        n = _flagged(int(n))
+    if lapack:
+        pool_for_devices(int(n))  # batched LAPACK kernels on several devices (see there)
     return int(n)
 
 
