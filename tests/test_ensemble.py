@@ -450,3 +450,25 @@ def test_cli_hermite_ensemble_on_two_cpu_devices_finishes(tmp_path):
     assert single.returncode == 0, single.stderr[-3000:]
     one = xr.open_dataset(tmp_path / "one" / "ensemble.nc")
     np.testing.assert_allclose(ds["tension_b_max"].values[0], one["tension_b_max"].values[0], rtol=1e-6)
+
+
+def test_a_pool_no_wider_than_the_devices_is_detected(monkeypatch):
+    """simulate_ensemble runs on one device (with a warning) where several CPU
+    devices could starve XLA:CPU's task pool in batched LAPACK kernels."""
+    from moorjax.dynamics.settings import plan
+    from moorjax.element import HermiteElement
+    from moorjax.ensemble.run import _pool_may_starve
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+
+    deck = read_deck(example_path("oc3_catenary"))
+    linear = build_scene(deck, segments=8)
+    hermite = build_scene(deck, segments=4, element=HermiteElement())
+    monkeypatch.setenv("PJRT_NPROC", "1")
+    assert _pool_may_starve(hermite, plan(1.0, scene=hermite), 2)
+    assert _pool_may_starve(linear, plan(1.0, scene=linear, solver="kvaerno5"), 2)
+    assert not _pool_may_starve(linear, plan(1.0, scene=linear), 2)
+    assert not _pool_may_starve(linear, plan(1.0, scene=linear, solver="heun", dt=1e-3), 2)
+    assert not _pool_may_starve(hermite, plan(1.0, scene=hermite), 1)
+    monkeypatch.setenv("PJRT_NPROC", "3")
+    assert not _pool_may_starve(hermite, plan(1.0, scene=hermite), 2)

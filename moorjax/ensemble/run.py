@@ -169,6 +169,33 @@ def warn_unresolved(scenes, off, members=None):
             f"segments. {RESOLUTION_ADVICE}", UnresolvedTouchdownWarning, stacklevel=3)
 
 
+def _pool_may_starve(scene, settings, n_devices) -> bool:
+    """Whether ``n_devices`` CPU devices running this ensemble at once could
+    starve XLA:CPU's task pool: the programs may call batched LAPACK kernels
+    (anything but linear-element lines with a band under ROS34PW2 or an
+    explicit solver) and the pool (``PJRT_NPROC`` as the process started, else
+    the cores) has no more threads than devices
+    (:func:`moorjax._xla_flags.pool_for_devices`)."""
+    import os
+
+    import diffrax
+
+    from ..dynamics.rosenbrock import RosenbrockW
+    from ..dynamics.vector_field import has_stiff_band, inertial_ends
+
+    if n_devices < 2 or jax.default_backend() != "cpu":
+        return False
+    try:
+        pool = int(os.environ.get("PJRT_NPROC") or os.cpu_count() or 1)
+    except ValueError:
+        pool = os.cpu_count() or 1
+    if pool > n_devices:
+        return False
+    plain = (has_stiff_band(scene) and not inertial_ends(scene)
+             and isinstance(settings.solver, RosenbrockW | diffrax.AbstractERK))
+    return not plain
+
+
 def _check_members(scenes, t0):
     for i, s in enumerate(scenes):
         try:
@@ -274,6 +301,14 @@ def simulate_ensemble(
     # at every step of the loops (measured, case A with one member: 8.2 ms per
     # simulated second on one device, 27.6 padded to two)
     devices = list(devices)[:n] if devices else []
+    if len(devices) > 1 and _pool_may_starve(first, p, len(devices)):
+        warnings.warn(
+            f"this ensemble may call batched LAPACK kernels (Hermite lines, bodies, points, bending or "
+            f"an implicit solver other than ROS34PW2) and XLA:CPU's task pool has no more threads than "
+            f"its {len(devices)} devices, with which jaxlib 0.10 can hang: it runs on one device. "
+            "Call moorjax.ensemble.use_cpu_cores() before JAX starts (or set PJRT_NPROC above the "
+            "device count) to use them all", stacklevel=2)
+        devices = devices[:1]
     n_dev = max(len(devices), 1)
     # members per integration call: a multiple of the devices, the last call padded
     # with copies of the last member (one compiled program for every call)
