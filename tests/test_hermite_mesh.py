@@ -271,3 +271,34 @@ def test_a_line_sagging_onto_the_bed_is_graded_at_both_touchdowns():
     err_equal = max(abs(float(equal.tension_a) / t_end - 1), abs(float(equal.tension_b) / t_end - 1))
     assert err < 5e-4 and err_equal > 10 * err, (err, err_equal)
     assert abs(float(st.grounded_length) - grounded) < 0.5
+
+
+def test_hermite_lines_piled_on_the_bed_are_warned_about():
+    """A Hermite line longer than its path along the seabed (horizontal distance
+    of its ends plus their heights above the bed) lies piled with a corner the
+    cubics cannot represent: solve_line_statics warns before solving; shorter
+    lines and the linear element do not."""
+    import warnings
+
+    import moorjax as mj
+    from moorjax.element import HermiteElement
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+    from moorjax.statics import solve_line_statics
+    from moorjax.statics.hermite import PiledLineWarning, check_piled
+
+    scene = build_scene(read_deck(example_path("oc3_catenary")), segments=10)
+    lt, env = scene.lines[0].line_type, scene.env
+
+    def line(length, element):
+        return mj.Line(lt, length, 10, mj.FixedEnd([-1100.0, 0.0, -320.0]), mj.FixedEnd([0.0, 0.0, -70.0]),
+                       element=element)
+
+    # the path: 1100 m along the bed and 250 m up to the fairlead
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert not check_piled(line(1349.0, HermiteElement()), env)
+        assert not check_piled(line(1500.0, None), env)
+        solve_line_statics(line(1500.0, HermiteElement()), env, throw=False)
+    piled = [w for w in seen if issubclass(w.category, PiledLineWarning)]
+    assert len(piled) == 1 and "1350 m" in str(piled[0].message) and "linear element" in str(piled[0].message)

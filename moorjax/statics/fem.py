@@ -385,12 +385,15 @@ def solve_line_statics(
     :data:`~moorjax.statics.hermite.RESOLUTION_TOL` the touchdown bends
     more sharply than the elements resolve, and it warns
     (``UnresolvedTouchdownWarning``; ``converged`` says only that the discrete
-    equations are solved).
+    equations are solved). A Hermite line longer than its path along the seabed
+    warns before the solve (``PiledLineWarning``,
+    :func:`~moorjax.statics.hermite.check_piled`).
     """
+    from .hermite import check_piled, check_resolution
+
+    check_piled(line, env, t)  # before a solve that may fail on such a line
     out = line_statics(line, env, t, init, rtol=rtol, atol=atol, max_steps=max_steps, throw=throw,
                        method=method)
-    from .hermite import check_resolution
-
     check_resolution(line, env, out, t)
     return out
 

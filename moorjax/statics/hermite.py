@@ -679,6 +679,49 @@ def _relative_offsets(ta, tb, ok, fine_a, fine_b, fine_ok):
     return jnp.where(ok & fine_ok, off, jnp.nan), ref
 
 
+class PiledLineWarning(UserWarning):
+    """A Hermite line longer than its path along the seabed (:func:`check_piled`)."""
+
+
+def check_piled(line: Line, env, t=0.0) -> bool:
+    """Warn where a Hermite line is longer than its path along a flat seabed
+    (the horizontal distance of its ends plus each end's height above the
+    bed); returns whether it warned.
+
+    Such a line lies partly slack on the bed, piled, with no horizontal
+    tension: the part that hangs is vertical and meets the bed at a corner,
+    which C¹ cubics cannot represent. Measured on case A's chain from
+    (−1100, 0, −320) to (0, 0, −70) m (a 1350 m path), 10 equal elements:
+    1400 m converges to 155 kN at the fairlead against the linear element's
+    177 kN (the hanging chain's weight), 1500 m does not converge; body starts
+    on such lines fail. The linear element's lumped nodes follow the corner.
+    Values only (skipped under ``jit``/``vmap``), flat seabeds only."""
+    import warnings
+
+    from ..element.hermite import HermiteElement
+    from .fem import _end_positions
+
+    if (env.seabed is None or getattr(env.seabed, "bathymetry", None) is not None
+            or not isinstance(line.element, HermiteElement)):
+        return False
+    try:
+        ra, rb = (np.asarray(r, dtype=float) for r in _end_positions(line, np.float64(t)))
+        length, depth = float(line.length), float(env.depth)
+    except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError, TypeError):
+        return False
+    path = float(np.linalg.norm(rb[:2] - ra[:2]) + (ra[2] + depth) + (rb[2] + depth))
+    if length <= path:
+        return False
+    warnings.warn(
+        f"line {line.label}: its unstretched length {length:.6g} m exceeds its path along the seabed "
+        f"({path:.6g} m: the horizontal distance of its ends plus their heights above the bed), so part "
+        "of it lies piled on the bed with no horizontal tension and hangs to it at a corner, which "
+        "Hermite elements (C¹ cubics) cannot represent: its end tensions are unreliable and its "
+        "statics may not converge. Use the linear element for this line (--element linear).",
+        PiledLineWarning, stacklevel=3)
+    return True
+
+
 def check_resolution(line: Line, env, st, t=0.0) -> float | None:
     """Warn where a grounded line of equal Hermite elements does not resolve
     its touchdown; returns the relative end-tension difference it measured
