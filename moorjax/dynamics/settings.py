@@ -101,6 +101,17 @@ def resolve_tolerances(solver, rtol, atol, atol_velocity=None, scene=None):
     return name, rtol, atol, atol_velocity
 
 
+def factorises_nothing_dense(solver) -> bool:
+    """Whether ``solver`` (a diffrax solver object) steps without dense
+    factorisations of its own: the Rosenbrock-W stepper (on a band, for scenes
+    that give one) or an explicit Runge–Kutta method. The Kvaerno methods'
+    Newton iterations may factorise dense matrices (batched LAPACK kernels;
+    see :func:`moorjax._xla_flags.pool_for_devices`)."""
+    from .rosenbrock import RosenbrockW
+
+    return isinstance(solver, RosenbrockW | diffrax.AbstractERK)
+
+
 def resolve_solver(solver, scene=None):
     """The method name ``"auto"`` stands for: ``"ros34pw2"`` (the Rosenbrock-W
     method; as accurate as Kvaerno5 at equal tolerances and 1.5–2.5× cheaper on

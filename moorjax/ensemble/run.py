@@ -178,9 +178,7 @@ def _pool_may_starve(scene, settings, n_devices) -> bool:
     (:func:`moorjax._xla_flags.pool_for_devices`)."""
     import os
 
-    import diffrax
-
-    from ..dynamics.rosenbrock import RosenbrockW
+    from ..dynamics.settings import factorises_nothing_dense
     from ..dynamics.vector_field import has_stiff_band, inertial_ends
 
     if n_devices < 2 or jax.default_backend() != "cpu":
@@ -192,7 +190,7 @@ def _pool_may_starve(scene, settings, n_devices) -> bool:
     if pool > n_devices:
         return False
     plain = (has_stiff_band(scene) and not inertial_ends(scene)
-             and isinstance(settings.solver, RosenbrockW | diffrax.AbstractERK))
+             and factorises_nothing_dense(settings.solver))
     return not plain
 
 
