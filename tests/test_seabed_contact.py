@@ -78,3 +78,28 @@ def test_contact_force_gradient_finite_at_bed():
 def test_negative_depth_refused():
     with pytest.raises(ValueError, match="damping ramp depth"):
         mj.Seabed(damping_depth=-1.0)
+
+
+@pytest.mark.slow
+def test_grounded_chain_converges_at_second_order_in_n_while_taut():
+    """A grounded chain whose touchdown moves along the bed but which stays taut
+    (case A's line on a 2.5 m sine, least fairlead tension ≈ 0.5 MN) converges at
+    second order in the number of segments, as the line hanging free does: the
+    node-lumped contact does not cost an order. (At case A's 5 m the grounded
+    part goes slack and snaps taut, and the tension converges at first
+    order: 0.86 between N = 20, 40 and 80 over the first 10 s;
+    benchmarks/order_in_n.py, benchmarks/README.md session 42)."""
+    from moorjax.dynamics import simulate
+
+    histories = {}
+    for n in (20, 40, 80):  # coarser pairs are second order in either regime
+        scene = build_scene(read_deck(example_path("oc3_catenary")), segments=n)
+        scene = eqx.tree_at(lambda s: s.lines[0].end_b, scene,
+                            mj.SinePath((-5.2, 0.0, -70.0), [2.5, 0.0, 0.0], 10.0))
+        res = simulate(scene, 10.0, rtol=1e-6, atol=1e-5, dt_out=0.05)
+        assert bool(res.succeeded())
+        ts = np.asarray(res.ts)
+        histories[n] = np.asarray(res.tension_b[:, 0])[ts >= 0.5]
+    d1 = np.sqrt(np.mean((histories[20] - histories[40]) ** 2)) / np.std(histories[40])
+    d2 = np.sqrt(np.mean((histories[40] - histories[80]) ** 2)) / np.std(histories[80])
+    assert np.log2(d1 / d2) > 1.4, (d1, d2)  # measured 1.70 (at 5 m: 0.86)
