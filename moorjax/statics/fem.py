@@ -300,15 +300,24 @@ def _end_positions(line, t):
     return line.end_a.position(t), line.end_b.position(t)
 
 
-def check_geometry(line, env, t):
-    """Python-level checks on concrete end positions (skipped under tracing)."""
+def concrete_geometry(line, env, t):
+    """The line's end positions ra, rb (3,) [m] at time t, its unstretched length
+    [m] and the water depth [m] as NumPy values, or None where any of them is
+    traced (under ``jit``/``vmap``: the host-level checks are then skipped)."""
     try:
         ends = _end_positions(line, t if isinstance(t, jax.core.Tracer) else np.float64(t))
         ra, rb = (np.asarray(r, dtype=float) for r in ends)
-        length = float(line.length)
-        depth = float(env.depth)
+        return ra, rb, float(line.length), float(env.depth)
     except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError, TypeError):
+        return None
+
+
+def check_geometry(line, env, t):
+    """Python-level checks on concrete end positions (skipped under tracing)."""
+    geometry = concrete_geometry(line, env, t)
+    if geometry is None:
         return
+    ra, rb, length, depth = geometry
     for name, r in (("A", ra), ("B", rb)):
         if r[2] < -depth * (1 + 1e-6):
             raise ValueError(

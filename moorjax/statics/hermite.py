@@ -699,16 +699,15 @@ def check_piled(line: Line, env, t=0.0) -> bool:
     import warnings
 
     from ..element.hermite import HermiteElement
-    from .fem import _end_positions
+    from .fem import concrete_geometry
 
     if (env.seabed is None or getattr(env.seabed, "bathymetry", None) is not None
             or not isinstance(line.element, HermiteElement)):
         return False
-    try:
-        ra, rb = (np.asarray(r, dtype=float) for r in _end_positions(line, np.float64(t)))
-        length, depth = float(line.length), float(env.depth)
-    except (jax.errors.ConcretizationTypeError, jax.errors.TracerArrayConversionError, TypeError):
+    geometry = concrete_geometry(line, env, t)
+    if geometry is None:
         return False
+    ra, rb, length, depth = geometry
     path = float(np.linalg.norm(rb[:2] - ra[:2]) + (ra[2] + depth) + (rb[2] + depth))
     if length <= path:
         return False
