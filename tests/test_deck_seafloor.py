@@ -151,8 +151,10 @@ def test_moordyn_pendulum_deck_settles_on_the_slope():
     Then it took 105 Newton iterations, or more than 200 under other rounding,
     and the compiled twin that starts ``simulate`` did not converge: the line's
     statics crawled from its last shape at most trial poses, and trials were
-    refused for force rises below what the lines resolve. Now 15–16 under
-    either rounding.)"""
+    refused for force rises below what the lines resolve. Then 15–16 under
+    either rounding, until an AMD EPYC host's first Newton step went 5 m up
+    against the weight and stopped after 10 iterations (session 42): a step
+    that does negative work is now regularised, 29 iterations there.)"""
     from moorjax.dynamics import equilibrium_state
     from moorjax.statics import solve_system_statics
 
