@@ -40,6 +40,7 @@ from benchmarks.common import (  # noqa: E402
     static_init,
     write_json,
 )
+from benchmarks.moordyn_runner import rel_rms_error  # noqa: E402
 
 SETTLE_S = 0.5  # the start-up transient left out of the differences [s]
 
@@ -70,7 +71,7 @@ def main(argv=None):
     p = base_parser(__doc__)
     p.add_argument("--case", choices=sorted(CASES), default="A")
     p.add_argument("--amplitudes", type=float, nargs="+", metavar="M",
-                   help="fairlead sine amplitudes [m] (default: 1, 2.5 and 5 for A; 0.5, 1 and 2 for B)")
+                   help="fairlead sine amplitudes [m] (default: the case's own over 5, over 2, and itself: 1, 2.5, 5 for A; 0.4, 1, 2 for B)")
     p.add_argument("--ns", type=int, nargs="+", metavar="N", help="segment counts (default 10 20 40 80 160)")
     p.add_argument("--element", choices=("linear", "hermite"), default="linear")
     p.add_argument("--duration", type=float, default=20.0, help="simulated seconds (default 20)")
@@ -80,8 +81,8 @@ def main(argv=None):
     own = CASES[args.case].amplitude
     amplitudes = args.amplitudes or ([own / 2, own] if args.quick else [own / 5, own / 2, own])
     ns = sorted(args.ns or ([10, 20, 40, 80] if args.quick else [10, 20, 40, 80, 160]))
-    if len(ns) < 2:
-        p.error("--ns needs at least two segment counts")
+    if len(ns) < 2 or ns[0] < 1:
+        p.error("--ns needs at least two segment counts, each at least 1")
     ref = reference_csv(args.case)
     print(f"order in N, case {args.case}, {args.element} element, {args.duration:g} s, "
           f"solver auto at {args.rtol:g}/{args.atol:g}")
@@ -96,11 +97,8 @@ def main(argv=None):
         for a, b in zip(ns[:-1], ns[1:]):
             d = difference(runs[a]["t"], runs[a]["tension"], runs[b]["tension"])
             order = None if prev is None or d <= 0 else math.log(prev / d, b / a)
-            err = None
-            if ref is not None and math.isclose(amp, own):
-                from benchmarks.moordyn_runner import rel_rms_error
-
-                err = rel_rms_error(runs[a]["t"], runs[a]["tension"], ref)
+            err = (rel_rms_error(runs[a]["t"], runs[a]["tension"], ref)
+                   if ref is not None and math.isclose(amp, own) else None)
             rows.append(dict(case=args.case, element=args.element, amplitude_m=amp, N=a, N_fine=b,
                              difference=d, order=order, rel_err_vs_reference=err,
                              least_segment_N=runs[ns[-1]]["least_segment_N"],
