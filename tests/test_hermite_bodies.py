@@ -11,6 +11,7 @@ scene equals finite differences.
 
 from __future__ import annotations
 
+import equinox as eqx
 import numpy as np
 import pytest
 
@@ -341,3 +342,42 @@ def test_body_starts_on_drawn_hermite_point_scenes_converge():
     print(f"\nheave against the linear element at 80 segments, over the depth: resolved {quiet:.2e}, "
           f"unresolved touchdowns {loud:.2e}")
     assert quiet < 1e-2 and loud < 5e-2, off
+
+
+@pytest.mark.slow
+def test_system_statics_warn_of_a_piled_hermite_line_at_the_poses_found():
+    """A buoyant point on three 800 m chains of 4 Hermite elements from anchors
+    500 m out on a 200 m bed: each line is ~120 m longer than its path along the
+    bed to the point (500 m out and ~180 m down), so it piles on the bed and
+    hangs to it at a corner, which Hermite cubics cannot represent. The host
+    iteration converges to poses that rest on such lines' unreliable forces
+    (session 43: a point on three piled 1037 m chains came out 92 m off its
+    symmetric pose), and it said nothing: the lines' ends are on the body, so
+    the check of ``solve_line_statics`` never ran. ``solve_system_statics`` now
+    checks its lines at the poses it found as ``solve_line_statics`` checks one
+    line: each piled Hermite line warns, by name; the same lines at 600 m do
+    not."""
+    import warnings
+
+    from moorjax.statics.hermite import PiledLineWarning
+
+    chain = mj.LineType(0.09, 77.7066, 384.243e6)
+    bed = mj.Environment(depth=200.0, seabed=mj.Seabed(stiffness=3e6, damping=3e5))
+    anchors = [500.0 * np.array([np.cos(a), np.sin(a), 0.0]) + [0, 0, -200.0]
+               for a in (np.pi, np.pi / 3, -np.pi / 3)]
+    lines = [mj.Line(chain, 800.0, 4, mj.FixedEnd(a), mj.BodyEnd(0, [0, 0, 0]), element=HermiteElement(),
+                     label=f"L{i + 1}") for i, a in enumerate(anchors)]
+    scene = mj.Scene(lines, bed, bodies=[ConnectionPoint(2e4, [0, 0, -20.0], volume=60.0)])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        solve_system_statics(scene, throw=False)
+    said = sorted(str(w.message) for w in caught if issubclass(w.category, PiledLineWarning))
+    assert len(said) == 3 and all(f"line L{i + 1}:" in m and "linear element" in m
+                                  for i, m in enumerate(said)), said
+    # the same lines at 600 m rest on the bed without piling: no warning
+    short = mj.Scene([eqx.tree_at(lambda ln: ln.length, ln, 600.0) for ln in lines], bed,
+                     bodies=scene.bodies)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        solve_system_statics(short, throw=False)
+    assert not [w for w in caught if issubclass(w.category, PiledLineWarning)]

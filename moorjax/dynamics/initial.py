@@ -129,15 +129,12 @@ def _check_resolution_at_poses(scene, eq: Equilibrium, t0):
     of equal Hermite elements whose touchdown they do not follow warns here as
     it does without bodies. Nothing under ``jit``/``vmap`` (ensembles)."""
     from .._checks import _concrete
-    from ..statics.hermite import check_piled, check_resolution
+    from ..statics.hermite import check_lines
     from ..statics.system import _attached
 
     if eq.statics is None or all(st is None for st in eq.statics) or _concrete(eq.poses) is None:
         return
-    for line, st in zip(_attached(scene, eq.poses), eq.statics):
-        if st is not None:
-            check_piled(line, scene.env, t0)
-            check_resolution(line, scene.env, st, t0)
+    check_lines(_attached(scene, eq.poses), scene.env, eq.statics, t0)
 
 
 def resolution_offsets(scene, eq: Equilibrium, t0=0.0):

@@ -44,12 +44,14 @@ def _may_call_lapack(args) -> bool:
     ``ros34pw2`` or an explicit solver. Unreadable decks count as True (their
     error comes later, from the loader)."""
     from .._cli_common import deck_path
+    from ..dynamics.solvers import EXPLICIT, LINEARLY_IMPLICIT
     from ..io import read_deck
 
     if (args.element or "linear") != "linear":
         return True
-    if (args.solver or "auto") not in ("auto", "ros34pw2", "euler", "heun", "midpoint", "ralston",
-                                       "bosh3", "tsit5", "dopri5", "dopri8"):
+    # by name, the solvers of dynamics.settings.factorises_nothing_dense (and
+    # auto, which picks ROS34PW2 for such decks)
+    if (args.solver or "auto").lower() not in ("auto", *LINEARLY_IMPLICIT, *EXPLICIT):
         return True
     try:
         deck = read_deck(deck_path(args.deck))

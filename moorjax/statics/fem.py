@@ -396,14 +396,16 @@ def solve_line_statics(
     (``UnresolvedTouchdownWarning``; ``converged`` says only that the discrete
     equations are solved). A Hermite line longer than its path along the seabed
     warns before the solve (``PiledLineWarning``,
-    :func:`~moorjax.statics.hermite.check_piled`).
+    :func:`~moorjax.statics.hermite.check_piled`), and is then not checked
+    for its touchdown (grading does not mend it).
     """
     from .hermite import check_piled, check_resolution
 
-    check_piled(line, env, t)  # before a solve that may fail on such a line
+    piled = check_piled(line, env, t)  # before a solve that may fail on such a line
     out = line_statics(line, env, t, init, rtol=rtol, atol=atol, max_steps=max_steps, throw=throw,
                        method=method)
-    check_resolution(line, env, out, t)
+    if not piled:  # grading the touchdown does not mend a piled line
+        check_resolution(line, env, out, t)
     return out
 
 

@@ -691,11 +691,19 @@ def check_piled(line: Line, env, t=0.0) -> bool:
     Such a line lies partly slack on the bed, piled, with no horizontal
     tension: the part that hangs is vertical and meets the bed at a corner,
     which C¹ cubics cannot represent. Measured on case A's chain from
-    (−1100, 0, −320) to (0, 0, −70) m (a 1350 m path), 10 equal elements:
-    1400 m converges to 155 kN at the fairlead against the linear element's
-    177 kN (the hanging chain's weight), 1500 m does not converge; body starts
-    on such lines fail. The linear element's lumped nodes follow the corner.
-    Values only (skipped under ``jit``/``vmap``), flat seabeds only."""
+    (−1100, 0, −320) to (0, 0, −70) m (a 1350 m path; the hanging 250 m weigh
+    174.5 kN), 10 equal elements: 1400 m converges to 155 kN at the fairlead
+    (the linear element at 100 segments: 171 kN), 1500 m does not converge.
+    An element boundary at the corner and a slack ratio of 1e-6–1e-8 give
+    174.2 kN with the corner on the node, but with the fairlead 1–20 m higher
+    or lower (the corner off the node) the solve "converges" 0.2–10 % off, or
+    fails: the slack part on the bed admits spurious equilibria (arches of
+    cubics), so no mesh or regularisation was found that mends it (session
+    43). Bodies on such lines settle at poses that rest on these forces: a
+    point on three piled chains came out 92 m off its symmetric pose, with
+    ``converged`` true; :func:`check_lines` warns there too. The linear
+    element's lumped nodes follow the corner. Values only (skipped under
+    ``jit``/``vmap``), flat seabeds only."""
     import warnings
 
     from ..element.hermite import HermiteElement
@@ -766,6 +774,20 @@ def check_resolution(line: Line, env, st, t=0.0) -> float | None:
             f"the linear element's at {FINE_SEGMENTS * n} segments ({ref[worst]:.6g} N). {RESOLUTION_ADVICE}",
             UnresolvedTouchdownWarning, stacklevel=3)
     return float(off[worst])
+
+
+def check_lines(lines, env, statics, t=0.0) -> None:
+    """:func:`check_piled` and :func:`check_resolution` for lines solved
+    together (``statics``: their :class:`~moorjax.statics.fem.LineStatics`,
+    ``None`` for a line not solved by finite elements): what
+    :func:`~moorjax.statics.fem.solve_line_statics` runs on one line, for the
+    lines of a body scene at the poses its statics found (their ends are then
+    where the bodies put them, which the lines themselves do not know). Values
+    only (nothing under ``jit``/``vmap``). A piled line is not checked for its
+    touchdown's resolution: grading does not mend it (:func:`check_piled`)."""
+    for line, st in zip(lines, statics):
+        if st is not None and not check_piled(line, env, t):
+            check_resolution(line, env, st, t)
 
 
 def touchdown_mesh(line: Line, env, t=0.0, *, iterations: int = 6, tol: float = 1e-3,

@@ -249,8 +249,10 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
         if methods != fem:
             out = _system_newton(scene, poses, t, loads, tol, max_iterations, methods)
             if out.converged and _ends_above_bed(scene, out):
+                _check_lines(scene, out, t)
                 return out
     out = _system_newton(scene, poses, t, loads, tol, max_iterations, fem)
+    _check_lines(scene, out, t)
     if throw and not out.converged:
         bad = [scene.lines[i].label for i, s in enumerate(out.lines) if not bool(s.converged)]
         why = (f"the static solve of line(s) {', '.join(bad)} failed (can they reach their "
@@ -260,6 +262,18 @@ def solve_system_statics(scene, t=0.0, *, loads: bool = True, init=None, tol: fl
                + imbalance_report(scene, out.poses, out.residual, out.mooring))
         raise RuntimeError(f"system statics did not converge: {why}")
     return out
+
+
+def _check_lines(scene, out: SystemStatics, t) -> None:
+    """The host-level checks of :func:`~moorjax.statics.solve_line_statics` for
+    the FEM lines at the poses found: a Hermite line piled on the bed or whose
+    touchdown its elements miss warns (their forces, and so the poses, are then
+    unreliable although the iteration converged)."""
+    from .hermite import check_lines
+
+    methods = out.methods or ("fem",) * len(out.lines)
+    statics = [st if m == "fem" else None for st, m in zip(out.lines, methods)]
+    check_lines(_attached(scene, out.poses), scene.env, statics, t)
 
 
 #: step halvings the system Newton tries before it gives up on an iteration: enough
