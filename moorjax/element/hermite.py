@@ -83,7 +83,7 @@ class HermiteDofs(eqx.Module):
     lam: jax.Array
 
 
-def strain_of_tension(law, lam, slack_ratio=1.0):
+def strain_of_tension(law, lam, slack_ratio=1.0, slack_width=0.0):
     """Strain ε [-] at effective tension λ [N]: the inverse of the axial law.
 
     Exact for a linear EA; otherwise Newton iterations on ``tension_positive``
@@ -91,10 +91,22 @@ def strain_of_tension(law, lam, slack_ratio=1.0):
     derivative is the implicit one, 1/T'(ε). Compression (λ < 0): ε =
     λ/(c·EA) with c = ``slack_ratio`` [-] for a unilateral law (the slack
     regularisation, see the module notes), λ/EA for a :class:`Bilateral` one.
+
+    ``slack_width`` δ [N] > 0 rounds the unilateral law's kink at λ = 0: ε =
+    ε_law(λ₊) + λ₋/(c·EA) with λ₋ = −δ·softplus(−λ/δ) (→ min(λ, 0) as δ → 0)
+    and λ₊ = λ − λ₋ (→ max(λ, 0)), smooth in λ; it differs from the kinked
+    law only where |λ| is a few δ (by at most δ·ln 2/(c·EA) in strain, at
+    λ = 0). 0 (the default) keeps the kink.
     """
     ea = law.nominal_ea()
     inner = law.law if isinstance(law, Bilateral) else law
     ea_c = ea if isinstance(law, Bilateral) else ea * slack_ratio
+    if not isinstance(law, Bilateral) and not (isinstance(slack_width, (int, float)) and slack_width == 0.0):
+        width = jnp.asarray(slack_width, float)
+        wide = width > 0.0
+        safe = jnp.where(wide, width, 1.0)
+        neg = jnp.where(wide, -safe * jax.nn.softplus(-lam / safe), jnp.minimum(lam, 0.0))
+        return strain_of_tension(law, lam - neg, 1.0) + neg / ea_c
     if isinstance(inner, LinearEA):
         return jnp.where(lam >= 0.0, lam, 0.0) / ea + jnp.where(lam < 0.0, lam, 0.0) / ea_c
     pos = jnp.maximum(lam, 0.0)
@@ -106,6 +118,13 @@ def strain_of_tension(law, lam, slack_ratio=1.0):
     e = lax.fori_loop(0, 40, lambda _, e: newton(e), pos / ea)
     e = newton(lax.stop_gradient(e))
     return jnp.where(lam >= 0.0, e, jnp.where(lam < 0.0, lam, 0.0) / ea_c)
+
+
+def element_strain(line, lam):
+    """:func:`strain_of_tension` of a Hermite line's axial law with its
+    element's slack regularisation (``slack_ratio``, ``slack_width``)."""
+    el = line.element
+    return strain_of_tension(line.line_type.axial, lam, el.slack_ratio, el.slack_width)
 
 
 def element_lengths(line):
@@ -213,7 +232,7 @@ def generalized_forces(line, env, dofs: HermiteDofs, vel: HermiteDofs | None = N
     lt = line.line_type
     r, d1, d2, lam = element_fields(line, dofs)
     if tension is None:
-        eps = strain_of_tension(lt.axial, lam, line.element.slack_ratio)
+        eps = element_strain(line, lam)
     else:
         lam, eps = tension
     g = (lam / (1.0 + eps))[..., None] * d1  # ∂(internal work)/∂r'
@@ -256,7 +275,7 @@ def extensibility(line, dofs: HermiteDofs):
     lt = line.line_type
     n = line.n_segments
     _, d1, _, lam = element_fields(line, dofs)
-    eps = strain_of_tension(lt.axial, lam, line.element.slack_ratio)
+    eps = element_strain(line, lam)
     c = jnp.sum(d1 * d1, axis=-1) / (1.0 + eps) - (1.0 + eps)  # (n, Q)
     ce = jnp.einsum("mq,nq,nq->nm", P, quadrature_weights(line), c)  # (n, 3)
     out = jnp.zeros(2 * n + 1)
@@ -272,7 +291,7 @@ def extensibility_jacobian(line, dofs: HermiteDofs):
     s2 = jnp.sum(d1 * d1, axis=-1)
 
     def c(l):
-        eps = strain_of_tension(lt.axial, l, line.element.slack_ratio)
+        eps = element_strain(line, l)
         return s2 / (1.0 + eps) - (1.0 + eps)
 
     _, dc = jax.jvp(c, (lam,), (jnp.ones_like(lam),))  # elementwise in λ
@@ -307,6 +326,10 @@ class HermiteElement(AbstractElement):
     Args:
         slack_ratio: compression stiffness of a unilateral line as a fraction of
             its EA [-] (the slack regularisation of the module notes; 1e-4).
+        slack_width: δ [N], the tension over which the unilateral law's kink
+            at λ = 0 is rounded in the tension field's strain
+            (:func:`strain_of_tension`; 0, the default: kinked). It acts where
+            the field λ is solved: the statics and ``MixedTension``.
         tension: how the tension follows from the slopes in the dynamics:
             :class:`~moorjax.element.hermite_motion.StrainTension` (the default,
             the unilateral law at each quadrature point) or ``MixedTension``
@@ -322,15 +345,20 @@ class HermiteElement(AbstractElement):
     slack_ratio: float = 1e-4
     tension: "AbstractTension" = None  # noqa: F821
     mesh: jax.Array | None = None
+    slack_width: float = 0.0
 
-    def __init__(self, slack_ratio=1e-4, tension=None, mesh=None):
+    def __init__(self, slack_ratio=1e-4, tension=None, mesh=None, slack_width=0.0):
         from .._numerics import as_float
         from .hermite_motion import StrainTension
 
         if isinstance(slack_ratio, (int, float)) and not (0.0 < slack_ratio <= 1.0):
             raise ValueError(f"HermiteElement: slack_ratio = {slack_ratio} must be in (0, 1] "
                              "(compression stiffness over EA; 1e-4 is the default)")
+        if isinstance(slack_width, (int, float)) and not (0.0 <= slack_width < np.inf):
+            raise ValueError(f"HermiteElement: slack_width = {slack_width} N must be finite and >= 0 "
+                             "(the tension over which the slack kink is rounded; 0: kinked)")
         self.slack_ratio = slack_ratio
+        self.slack_width = slack_width
         self.tension = StrainTension() if tension is None else tension
         if mesh is not None and not isinstance(mesh, jax.core.Tracer):
             m = np.asarray(mesh, dtype=float)
