@@ -49,8 +49,10 @@ case B 0.74 %. Session 43: with the slack kink rounded
 (``HermiteElement(slack_ratio=1e-3, slack_width=2000.0)``, δ = 2 kN) and
 ``MixedTension(iterations=8)`` the mixed closure runs through both cases:
 A 0.83 %, B 0.78 % at 10 elements over 60 s (the snap's error 2.5 times
-smaller), at the cost of its dense solves; not the default yet (δ and c are
-found on these two cases, see ``benchmarks/README.md``).
+smaller), at the cost of its dense solves. But δ and c were found on these
+two cases: on other amplitudes it is worse than the strain closure (A at
+2.5 m 0.95 against 0.78 %, B at 1 m 1.09 against 0.66 %) or fails (B at 3 m),
+so it is not the default (``benchmarks/README.md``, session 43).
 """
 
 from __future__ import annotations
