@@ -26,8 +26,14 @@ def element_from(args):
     """The line discretisation named by ``--element`` (None: the default, linear)."""
     from .element import HermiteElement, LinearElement
 
+    from .element.hermite_motion import MixedTension, ProjectedTension, StrainTension
+
     name = getattr(args, "element", "linear")
-    return {"linear": LinearElement(), "hermite": HermiteElement()}[name]
+    if name == "linear":
+        return LinearElement()
+    tension = {"projected": ProjectedTension, "strain": StrainTension,
+               "mixed": MixedTension}[getattr(args, "hermite_tension", "projected")]
+    return HermiteElement(tension=tension())
 
 
 def wave_kinematics_from(spec: str | None):

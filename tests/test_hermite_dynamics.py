@@ -77,6 +77,28 @@ def test_cli_element_option_on_dynamics():
         with contextlib.redirect_stdout(out), pytest.raises(SystemExit):
             main([cmd, "--help"])
         assert "--element" in out.getvalue(), cmd
+        assert "--hermite-tension" in out.getvalue(), cmd
+
+
+def test_cli_hermite_tension_option_names_the_closure():
+    """``--hermite-tension`` picks the dynamics' tension closure (default: the
+    projected field), and is refused with an unknown name."""
+    import argparse
+
+    from moorjax._cli_load import element_from
+    from moorjax.element.hermite_motion import MixedTension, ProjectedTension, StrainTension
+
+    def of(**kw):
+        return element_from(argparse.Namespace(element="hermite", **kw)).tension
+
+    assert isinstance(of(), ProjectedTension)
+    assert isinstance(of(hermite_tension="strain"), StrainTension)
+    assert isinstance(of(hermite_tension="mixed"), MixedTension)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), pytest.raises(SystemExit):
+        main(["simulate", "example:oc3_catenary", "--duration", "1", "--element", "hermite",
+              "--hermite-tension", "exact"])
+    assert "invalid choice" in err.getvalue()
 
 
 @pytest.mark.slow

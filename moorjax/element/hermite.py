@@ -331,10 +331,12 @@ class HermiteElement(AbstractElement):
             (:func:`strain_of_tension`; 0, the default: kinked). It acts where
             the field λ is solved: the statics and ``MixedTension``.
         tension: how the tension follows from the slopes in the dynamics:
-            :class:`~moorjax.element.hermite_motion.StrainTension` (the default,
-            the unilateral law at each quadrature point) or ``MixedTension``
-            (Wu's field eliminated per evaluation); see that module for the
-            measurements that chose the default. Statics always solve Wu's field.
+            :class:`~moorjax.element.hermite_motion.ProjectedTension` (the
+            default: Wu's quadratic field per element, the law on the projected
+            strain), ``StrainTension`` (the unilateral law at each quadrature
+            point) or ``MixedTension`` (Wu's continuous field eliminated per
+            evaluation); see that module for the measurements that chose the
+            default. Statics always solve Wu's field.
         mesh: the elements' relative lengths (n,) [-] from end A (normalised to
             the line's length; ``None``: equal elements). A node placed at the
             touchdown, where the line's curvature jumps, is what a cubic needs
@@ -349,7 +351,7 @@ class HermiteElement(AbstractElement):
 
     def __init__(self, slack_ratio=1e-4, tension=None, mesh=None, slack_width=0.0):
         from .._numerics import as_float
-        from .hermite_motion import StrainTension
+        from .hermite_motion import ProjectedTension
 
         if isinstance(slack_ratio, (int, float)) and not (0.0 < slack_ratio <= 1.0):
             raise ValueError(f"HermiteElement: slack_ratio = {slack_ratio} must be in (0, 1] "
@@ -359,7 +361,7 @@ class HermiteElement(AbstractElement):
                              "(the tension over which the slack kink is rounded; 0: kinked)")
         self.slack_ratio = slack_ratio
         self.slack_width = slack_width
-        self.tension = StrainTension() if tension is None else tension
+        self.tension = ProjectedTension() if tension is None else tension
         if mesh is not None and not isinstance(mesh, jax.core.Tracer):
             m = np.asarray(mesh, dtype=float)
             if m.ndim != 1 or m.size < 1 or not np.all(np.isfinite(m)) or np.any(m <= 0.0):

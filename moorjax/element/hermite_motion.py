@@ -26,7 +26,13 @@ How the extensibility condition (Wu et al. Eq. 27) enters — the tension closur
   Newton step is taken on a stopped-gradient iterate with a frozen Jacobian),
   so the implicit solvers' Jacobians and ``jax.grad`` see the exact
   constrained dynamics: an ODE on (U, U̇), no DAE.
-- :class:`StrainTension` (the default): λ = T(|r'| − 1) at every quadrature
+- :class:`ProjectedTension` (the default): Wu's quadratic field element by
+  element, λ = Π T(Π ε) with ε = |r'| − 1 and Π the L2 projection within each
+  element onto quadratics (Eq. 27 for small strains: the field's strain is
+  the projection of the stretch). The law acts on the projected strain, so the
+  slack kink needs no inverse and no inner solve; the forces are the gradient
+  of ∫ ψ(Π ε) ds, and each element's tension depends on its own unknowns.
+- :class:`StrainTension`: λ = T(|r'| − 1) at every quadrature
   point, the axial law's unilateral tension directly (a displacement-only
   Hermite element: no regularisation of the slack law, no inner solve).
 
@@ -53,6 +59,20 @@ smaller), at the cost of its dense solves. But δ and c were found on these
 two cases: on other amplitudes it is worse than the strain closure (A at
 2.5 m 0.95 against 0.78 %, B at 1 m 1.09 against 0.66 %) or fails (B at 3 m),
 so it is not the default (``benchmarks/README.md``, session 43).
+
+Session 44: the strain closure over-constrains a sagging cubic (its stretch
+|r'| − 1 is no polynomial, membrane locking); projected onto each element's
+quadratics it does not. Case A at 10 elements: 1.39 % against the strain
+closure's 1.82 % over 20 s, 1.13 against 1.53 % over 60 s; case B 0.73
+against 0.74 % over 60 s. Over six drawn surges of case A's line (1–8 m, 6–16 s
+periods; error against moorjax's own N = 160) it is better on four (up to
+1.69 → 1.07 %), equal on one and worse on one (0.97 → 1.27 %); on six of
+case B's within −0.05/+0.015 % (``benchmarks/README.md``, session 44). The
+cost is the same order (A, 20 s: 0.66 against 0.59 s per run). A projection
+onto linears gives 0.94–1.0 % on case A but leaves a zero-energy mode on a
+straight line (the slopes' lengths scaled together) and doubles the error
+of taut surges (A at 2.5 m 1.67 against 0.78 %): not offered as the
+default, ``ProjectedTension(degree=1)`` only.
 """
 
 from __future__ import annotations
@@ -105,6 +125,10 @@ def unpack_hermite(line, q) -> HermiteState:
 class AbstractTension(eqx.Module):
     """How a Hermite line's tension follows from its slopes."""
 
+    #: whether an element's tension depends on that element's unknowns only (then
+    #: the implicit stages' matrix is block-tridiagonal: :mod:`.hermite_stage`)
+    element_local = False
+
     @abc.abstractmethod
     def resolve(self, line, dofs: HermiteDofs):
         """``(dofs with lam set, tension)``: ``tension`` is ``None`` when the field
@@ -150,10 +174,64 @@ class MixedTension(AbstractTension):
 class StrainTension(AbstractTension):
     """λ = T(|r'| − 1) at each quadrature point (the unilateral law itself)."""
 
+    element_local = True
+
     def resolve(self, line, dofs):
         _, d1, _, _ = element_fields(line, dofs)
         strain = safe_norm(d1) - 1.0
         return dofs, (line.line_type.axial.tension(strain), strain)
+
+
+def projection_matrix(degree: int) -> np.ndarray:
+    """(Q, Q) L2 projection, per element, of values at the Gauss points onto the
+    polynomials of degree ≤ ``degree`` in ξ (discrete, in the quadrature's own
+    weights: Π = V·(Vᵀ W V)⁻¹·Vᵀ W with V the Legendre polynomials at the points)."""
+    from numpy.polynomial import legendre
+
+    from .hermite import XI
+
+    if not 0 <= degree < len(XI):
+        raise ValueError(f"ProjectedTension: degree = {degree} must be in 0..{len(XI) - 1}")
+    x = 2.0 * XI - 1.0
+    v = np.stack([legendre.legval(x, np.eye(degree + 1)[k]) for k in range(degree + 1)], axis=1)
+    w = np.diag(WQ)
+    return v @ np.linalg.solve(v.T @ w @ v, v.T @ w)
+
+
+class ProjectedTension(AbstractTension):
+    """Wu's quadratic tension field, element by element: λ = Π T(Π ε), ε = |r'| − 1.
+
+    Π is the L2 projection within each element onto polynomials of degree
+    ``degree`` (2: Wu's quadratic field, here discontinuous between elements).
+    For small strains Eq. 27, ∫ P_m [r'·r'/(1 + ε) − (1 + ε)] ds = 0, is
+    ∫ P_m (|r'| − 1 − ε(λ)) ds = 0: the field's strain is the projection of the
+    cubic's stretch, which is what Π ε is. The axial law then acts on the
+    projected strain at each point, so the slack kink needs no inverse (no inner
+    Newton, no regularisation); the second Π makes the forces the gradient of
+    the strain energy ∫ ψ(Π ε) ds (δ∫ψ(Πε) = ∫ Π[T(Πε)]·δε ds: Π is self-adjoint
+    in the quadrature's weights), so the stiffness stays symmetric. Each
+    element's tension depends on its own unknowns only: the stages keep their
+    block-tridiagonal matrix. Internal damping stays pointwise (BA·dε/dt).
+
+    Why: the stretch |r'| − 1 of a curved cubic is no polynomial, and asking it
+    to follow EA pointwise over-constrains a sagging element (membrane
+    locking). On a straight element ε is already quadratic, so the projection
+    changes nothing there and leaves no zero-energy mode (degree 1 would leave
+    one, the slopes' lengths scaled along the whole line).
+    """
+
+    degree: int = eqx.field(static=True, default=2)
+    element_local = True
+
+    def __check_init__(self):
+        projection_matrix(self.degree)  # refuses a degree outside 0..Q−1
+
+    def resolve(self, line, dofs):
+        _, d1, _, _ = element_fields(line, dofs)
+        strain = safe_norm(d1) - 1.0
+        proj = projection_matrix(self.degree)
+        lam = line.line_type.axial.tension(jnp.einsum("pq,nq->np", proj, strain))
+        return dofs, (jnp.einsum("pq,nq->np", proj, lam), strain)
 
 
 # -- mass, forces, accelerations ----------------------------------------------

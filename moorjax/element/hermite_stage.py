@@ -32,11 +32,12 @@ A = M − c·C − c²·K, the stage solve is
 
 still block-tridiagonal (P is block-diagonal).
 
-The matrix is exact for the strain closure
-(:class:`~moorjax.element.hermite_motion.StrainTension`). Wu's mixed field
-(:class:`~moorjax.element.hermite_motion.MixedTension`) couples each element's
-tension to the whole line, which the band would leave out: such lines keep the
-dense Newton solve.
+The matrix is exact for the element-local closures (``element_local``: the
+strain closure :class:`~moorjax.element.hermite_motion.StrainTension` and the
+projected field :class:`~moorjax.element.hermite_motion.ProjectedTension`).
+Wu's mixed field (:class:`~moorjax.element.hermite_motion.MixedTension`)
+couples each element's tension to the whole line, which the band would leave
+out: such lines keep the dense Newton solve.
 """
 
 from __future__ import annotations
@@ -51,14 +52,14 @@ from jaxtyping import Array
 from ..linalg import block_tridiagonal as btd
 from ..linalg.banded_solver import band_of
 from .hermite import clamped_slopes
-from .hermite_motion import StrainTension, _mass_apply, _nodes, dynamics, forces_and_mass
+from .hermite_motion import _mass_apply, _nodes, dynamics, forces_and_mass
 
 
 def provides_stage_factor(line) -> bool:
     """Whether :func:`stage_factor` is the exact stage matrix of ``line``
-    (structure): the strain closure (Wu's mixed field couples each element's
-    tension to the whole line)."""
-    return isinstance(line.element.tension, StrainTension)
+    (structure): its tension closure is element-local (Wu's mixed field couples
+    each element's tension to the whole line)."""
+    return line.element.tension.element_local
 
 
 class HermiteStageFactor(eqx.Module):

@@ -401,7 +401,7 @@ def closure_equilibrium(line: Line, env, dofs: HermiteDofs, t=0.0, *, rtol=1e-10
     """The equilibrium of the dynamics' tension closure, from Wu's static ``dofs``.
 
     With :class:`~moorjax.element.hermite_motion.MixedTension` that is ``dofs``
-    itself; with ``StrainTension`` (λ = T(|r'| − 1) pointwise) the positions and
+    itself; with ``ProjectedTension`` or ``StrainTension`` (λ from the slopes) the positions and
     slopes move slightly (the two closures differ by their discretisation
     error), so that a run starts at rest in its own equilibrium.
     """
