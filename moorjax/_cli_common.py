@@ -76,12 +76,14 @@ def element_option(d, mesh="uniform"):
                         "touchdown_mesh: grounded end tensions ~1e-4 of MoorPy's at 10 elements "
                         "against ~5e-3), 'uniform' keeps equal elements (default: %(default)s; "
                         "in dynamics the touchdown moves off the graded node)")
-    d.add_argument("--hermite-tension", choices=("projected", "strain", "mixed"), default="projected",
+    d.add_argument("--hermite-tension", choices=("projected", "element", "strain", "mixed"),
+                   default="projected",
                    help="with --element hermite, how the dynamics' tension follows from the "
-                        "slopes: 'projected' (default) Wu's quadratic field per element, the law "
-                        "on the strain projected onto it; 'strain' the law at every quadrature "
-                        "point; 'mixed' Wu's continuous field solved at every evaluation (dense "
-                        "solves, needs a line that stays taut); statics always solve Wu's field")
+                        "slopes: 'projected' (default) Wu's continuous quadratic field, the law "
+                        "on the strain projected onto it; 'element' the same field per element; "
+                        "'strain' the law at every quadrature point; 'mixed' Wu's field solved "
+                        "from his Eq. 27 at every evaluation (dense solves, a line that stays "
+                        "taut); statics always solve Wu's field")
 
 
 def dynamics_options(d):

@@ -31,8 +31,8 @@ def element_from(args):
     name = getattr(args, "element", "linear")
     if name == "linear":
         return LinearElement()
-    tension = {"projected": ProjectedTension, "strain": StrainTension,
-               "mixed": MixedTension}[getattr(args, "hermite_tension", "projected")]
+    tension = {"projected": ProjectedTension, "element": lambda: ProjectedTension(continuous=False),
+               "strain": StrainTension, "mixed": MixedTension}[getattr(args, "hermite_tension", "projected")]
     return HermiteElement(tension=tension())
 
 

@@ -91,7 +91,8 @@ def test_cli_hermite_tension_option_names_the_closure():
     def of(**kw):
         return element_from(argparse.Namespace(element="hermite", **kw)).tension
 
-    assert isinstance(of(), ProjectedTension)
+    assert isinstance(of(), ProjectedTension) and of().continuous
+    assert of(hermite_tension="element") == ProjectedTension(continuous=False)
     assert isinstance(of(hermite_tension="strain"), StrainTension)
     assert isinstance(of(hermite_tension="mixed"), MixedTension)
     err = io.StringIO()

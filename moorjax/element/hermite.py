@@ -332,8 +332,8 @@ class HermiteElement(AbstractElement):
             the field λ is solved: the statics and ``MixedTension``.
         tension: how the tension follows from the slopes in the dynamics:
             :class:`~moorjax.element.hermite_motion.ProjectedTension` (the
-            default: Wu's quadratic field per element, the law on the projected
-            strain), ``StrainTension`` (the unilateral law at each quadrature
+            default: Wu's continuous quadratic field, the law on the strain
+            projected onto it), ``StrainTension`` (the unilateral law at each quadrature
             point) or ``MixedTension`` (Wu's continuous field eliminated per
             evaluation); see that module for the measurements that chose the
             default. Statics always solve Wu's field.

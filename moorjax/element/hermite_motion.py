@@ -26,12 +26,13 @@ How the extensibility condition (Wu et al. Eq. 27) enters — the tension closur
   Newton step is taken on a stopped-gradient iterate with a frozen Jacobian),
   so the implicit solvers' Jacobians and ``jax.grad`` see the exact
   constrained dynamics: an ODE on (U, U̇), no DAE.
-- :class:`ProjectedTension` (the default): Wu's quadratic field element by
-  element, λ = Π T(Π ε) with ε = |r'| − 1 and Π the L2 projection within each
-  element onto quadratics (Eq. 27 for small strains: the field's strain is
-  the projection of the stretch). The law acts on the projected strain, so the
-  slack kink needs no inverse and no inner solve; the forces are the gradient
-  of ∫ ψ(Π ε) ds, and each element's tension depends on its own unknowns.
+- :class:`ProjectedTension` (the default): Wu's continuous quadratic field,
+  λ = Π T(Π ε) with ε = |r'| − 1 and Π the L2 projection onto that field (Eq.
+  27 for small strains: the field's strain is the projection of the stretch);
+  ``continuous=False`` projects within each element. The law acts on the
+  projected strain, so the slack kink needs no inverse and no inner solve;
+  the forces are the gradient of ∫ ψ(Π ε) ds; the stages' Newton matrix is the
+  per-element field's (block-tridiagonal).
 - :class:`StrainTension`: λ = T(|r'| − 1) at every quadrature
   point, the axial law's unilateral tension directly (a displacement-only
   Hermite element: no regularisation of the slack law, no inner solve).
@@ -61,18 +62,19 @@ two cases: on other amplitudes it is worse than the strain closure (A at
 so it is not the default (``benchmarks/README.md``, session 43).
 
 Session 44: the strain closure over-constrains a sagging cubic (its stretch
-|r'| − 1 is no polynomial, membrane locking); projected onto each element's
-quadratics it does not. Case A at 10 elements: 1.39 % against the strain
-closure's 1.82 % over 20 s, 1.13 against 1.53 % over 60 s; case B 0.73
-against 0.74 % over 60 s. Over six drawn surges of case A's line (1–8 m, 6–16 s
-periods; error against moorjax's own N = 160) it is better on four (up to
-1.69 → 1.07 %), equal on one and worse on one (0.97 → 1.27 %); on six of
-case B's within −0.05/+0.015 % (``benchmarks/README.md``, session 44). The
-cost is the same order (A, 20 s: 0.66 against 0.59 s per run). A projection
-onto linears gives 0.94–1.0 % on case A but leaves a zero-energy mode on a
-straight line (the slopes' lengths scaled together) and doubles the error
-of taut surges (A at 2.5 m 1.67 against 0.78 %): not offered as the
-default, ``ProjectedTension(degree=1)`` only.
+|r'| − 1 is no polynomial: membrane locking); projected onto Wu's quadratic
+field it does not. At 10 elements over 60 s against MoorDyn: case A 0.92 %
+(strain closure 1.53 %, the per-element projection 1.13 %), case B 0.72 %
+(0.74 %). Over 6 drawn surges of each case's line and 2 other amplitudes of
+each (20 s, against moorjax's own N = 160) it is better than the strain
+closure on 8 of 16, within 0.025 % on 4 and worse on 4 (by up to 0.20 %:
+A draw 0.97 → 1.16 %, A at 2.5 m 0.78 → 0.96 %); the geometric mean of the
+ratio of errors is 0.80 on case A's line, 0.92 on B's
+(``benchmarks/README.md``, session 44).
+Run time about 1.3 times the strain closure's (A, 20 s: 0.75 against 0.59 s).
+A per-element projection onto linears gives 0.94–1.0 % on case A but leaves
+a zero-energy mode on a straight line (the slopes' lengths scaled together)
+and doubles the error of taut surges (A at 2.5 m 1.67 %).
 """
 
 from __future__ import annotations
@@ -89,8 +91,10 @@ from jaxtyping import Array
 
 from .._numerics import safe_norm
 from ..linalg.ordering import after
-from .hermite import (H, WQ, HermiteDofs, clamped_slopes, element_fields, element_lengths,
-                      extensibility, extensibility_jacobian, generalized_forces)
+from ..linalg import block_tridiagonal as btd
+from .hermite import (H, P, WQ, HermiteDofs, clamped_slopes, element_fields, element_lengths,
+                      extensibility, extensibility_jacobian, generalized_forces,
+                      quadrature_weights)
 
 
 class HermiteState(eqx.Module):
@@ -125,9 +129,12 @@ def unpack_hermite(line, q) -> HermiteState:
 class AbstractTension(eqx.Module):
     """How a Hermite line's tension follows from its slopes."""
 
-    #: whether an element's tension depends on that element's unknowns only (then
-    #: the implicit stages' matrix is block-tridiagonal: :mod:`.hermite_stage`)
-    element_local = False
+    def stage_closure(self):
+        """The element-local closure whose block-tridiagonal matrix the implicit
+        stages' Newton iteration uses for this one (:mod:`.hermite_stage`): itself
+        where its tension depends on each element's own unknowns (the matrix is
+        then exact), ``None`` for the dense Jacobian."""
+        return None
 
     @abc.abstractmethod
     def resolve(self, line, dofs: HermiteDofs):
@@ -174,7 +181,8 @@ class MixedTension(AbstractTension):
 class StrainTension(AbstractTension):
     """λ = T(|r'| − 1) at each quadrature point (the unilateral law itself)."""
 
-    element_local = True
+    def stage_closure(self):
+        return self
 
     def resolve(self, line, dofs):
         _, d1, _, _ = element_fields(line, dofs)
@@ -199,39 +207,90 @@ def projection_matrix(degree: int) -> np.ndarray:
 
 
 class ProjectedTension(AbstractTension):
-    """Wu's quadratic tension field, element by element: λ = Π T(Π ε), ε = |r'| − 1.
+    """Wu's quadratic tension field from the projected strain: λ = Π T(Π ε), ε = |r'| − 1.
 
-    Π is the L2 projection within each element onto polynomials of degree
-    ``degree`` (2: Wu's quadratic field, here discontinuous between elements).
-    For small strains Eq. 27, ∫ P_m [r'·r'/(1 + ε) − (1 + ε)] ds = 0, is
+    Π is the L2 projection onto Wu's field (``continuous``, the default: the
+    continuous piecewise quadratics of his 2n + 1 values at the nodes and
+    midpoints), or within each element onto polynomials of degree ``degree``
+    (``continuous=False``; 2: the quadratics, discontinuous between elements).
+    For small strains Eq. 27, ∫ P_m [r'·r'/(1 + ε) − (1 + ε)] ds = 0, reads
     ∫ P_m (|r'| − 1 − ε(λ)) ds = 0: the field's strain is the projection of the
     cubic's stretch, which is what Π ε is. The axial law then acts on the
-    projected strain at each point, so the slack kink needs no inverse (no inner
-    Newton, no regularisation); the second Π makes the forces the gradient of
-    the strain energy ∫ ψ(Π ε) ds (δ∫ψ(Πε) = ∫ Π[T(Πε)]·δε ds: Π is self-adjoint
-    in the quadrature's weights), so the stiffness stays symmetric. Each
-    element's tension depends on its own unknowns only: the stages keep their
-    block-tridiagonal matrix. Internal damping stays pointwise (BA·dε/dt).
+    projected strain at each point, so the slack kink needs no inverse (no
+    inner Newton, no regularisation); the second Π makes the forces the
+    gradient of the strain energy ∫ ψ(Π ε) ds (δ∫ψ(Πε) = ∫ Π[T(Πε)]·δε ds: Π is
+    self-adjoint), so the stiffness stays symmetric. Internal damping stays
+    pointwise (BA·dε/dt; on the projected rate it was worse: case A 1.39 →
+    1.49 % with the per-element field).
 
     Why: the stretch |r'| − 1 of a curved cubic is no polynomial, and asking it
     to follow EA pointwise over-constrains a sagging element (membrane
-    locking). On a straight element ε is already quadratic, so the projection
-    changes nothing there and leaves no zero-energy mode (degree 1 would leave
-    one, the slopes' lengths scaled along the whole line).
+    locking). On a straight line the stretch of a C¹ cubic already is a
+    continuous piecewise quadratic: either projection changes nothing there and
+    leaves no zero-energy mode (a per-element degree 1 leaves one, the slopes'
+    lengths scaled together along the whole line).
+
+    The continuous field couples the line (Π solves Wu's field's Gram matrix,
+    block-tridiagonal, O(n)); the implicit stages' Newton iteration uses the
+    per-element field's block-tridiagonal matrix for it (:meth:`stage_closure`),
+    which is exact where the two agree (a straight taut line) and near it
+    elsewhere: case A at 10 elements takes the same time per run as with the
+    per-element field (0.70 against 0.65 s for 20 s simulated), against 2.17 s
+    with the dense Jacobian.
     """
 
     degree: int = eqx.field(static=True, default=2)
-    element_local = True
+    continuous: bool = eqx.field(static=True, default=True)
 
     def __check_init__(self):
         projection_matrix(self.degree)  # refuses a degree outside 0..Q−1
+        if self.continuous and self.degree != 2:
+            raise ValueError(f"ProjectedTension: the continuous field is Wu's quadratic one "
+                             f"(degree 2), got degree = {self.degree}; use continuous=False for "
+                             "a per-element projection of another degree")
+
+    def stage_closure(self):
+        return ProjectedTension(self.degree, continuous=False) if self.continuous else self
 
     def resolve(self, line, dofs):
         _, d1, _, _ = element_fields(line, dofs)
         strain = safe_norm(d1) - 1.0
-        proj = projection_matrix(self.degree)
-        lam = line.line_type.axial.tension(jnp.einsum("pq,nq->np", proj, strain))
-        return dofs, (jnp.einsum("pq,nq->np", proj, lam), strain)
+        if self.continuous:
+            gram = field_gram(line)
+
+            def proj(f):
+                return field_projection(line, gram, f)
+        else:
+            matrix = projection_matrix(self.degree)
+
+            def proj(f):
+                return jnp.einsum("pq,nq->np", matrix, f)
+        return dofs, (proj(line.line_type.axial.tension(proj(strain))), strain)
+
+
+def field_gram(line) -> btd.BlockTridiagonalLU:
+    """Wu's field's Gram matrix ∫ P_m P_k ds, factored: 2×2 blocks, block k holding
+    the values at node k and at the midpoint of element k (the last block node
+    n's and a unit placeholder)."""
+    n = line.n_segments
+    ge = jnp.einsum("mq,kq,nq->nmk", P, P, quadrature_weights(line))  # (n, 3, 3)
+    z = jnp.zeros((n + 1, 2, 2), ge.dtype)
+    diag = z.at[:n].add(ge[:, :2, :2]).at[1:, 0, 0].add(ge[:, 2, 2]).at[n, 1, 1].set(1.0)
+    upper = z.at[:n, :, 0].set(ge[:, :2, 2])
+    lower = z.at[1:, 0, :].set(ge[:, 2, :2])
+    return btd.factor(lower, diag, upper)
+
+
+def field_projection(line, gram, f):
+    """The L2 projection of values f (n, Q) at the quadrature points onto Wu's
+    continuous quadratic field, at the quadrature points (n, Q); ``gram`` from
+    :func:`field_gram`."""
+    n = line.n_segments
+    be = jnp.einsum("mq,nq,nq->nm", P, quadrature_weights(line), f)  # (n, 3)
+    rhs = jnp.zeros((n + 1, 2), be.dtype).at[:n].add(be[:, :2]).at[1:, 0].add(be[:, 2])
+    x = btd.solve(gram, rhs)
+    values = jnp.concatenate([x[:n], x[1:, :1]], axis=1)  # (n, 3): node, midpoint, next node
+    return jnp.einsum("mq,nm->nq", P, values)
 
 
 # -- mass, forces, accelerations ----------------------------------------------

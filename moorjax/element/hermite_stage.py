@@ -32,12 +32,15 @@ A = M − c·C − c²·K, the stage solve is
 
 still block-tridiagonal (P is block-diagonal).
 
-The matrix is exact for the element-local closures (``element_local``: the
-strain closure :class:`~moorjax.element.hermite_motion.StrainTension` and the
-projected field :class:`~moorjax.element.hermite_motion.ProjectedTension`).
-Wu's mixed field (:class:`~moorjax.element.hermite_motion.MixedTension`)
-couples each element's tension to the whole line, which the band would leave
-out: such lines keep the dense Newton solve.
+The matrix is exact for the element-local closures (the strain closure
+:class:`~moorjax.element.hermite_motion.StrainTension` and the per-element
+projected field). Wu's continuous field, projected
+(:class:`~moorjax.element.hermite_motion.ProjectedTension`, the default),
+couples each element's tension to the whole line: its stages use the
+per-element field's matrix (``stage_closure``), exact where the two agree and
+close elsewhere, and Newton's iteration converges on the exact residual. Wu's
+field solved from Eq. 27 (:class:`~moorjax.element.hermite_motion.MixedTension`)
+keeps the dense Newton solve.
 """
 
 from __future__ import annotations
@@ -56,10 +59,10 @@ from .hermite_motion import _mass_apply, _nodes, dynamics, forces_and_mass
 
 
 def provides_stage_factor(line) -> bool:
-    """Whether :func:`stage_factor` is the exact stage matrix of ``line``
-    (structure): its tension closure is element-local (Wu's mixed field couples
-    each element's tension to the whole line)."""
-    return line.element.tension.element_local
+    """Whether :func:`stage_factor` gives ``line``'s stages their Newton matrix
+    (structure): its tension closure names an element-local one for it
+    (``stage_closure``; Wu's field from Eq. 27 does not)."""
+    return line.element.tension.stage_closure() is not None
 
 
 class HermiteStageFactor(eqx.Module):
@@ -99,10 +102,15 @@ class HermiteStageFactor(eqx.Module):
 
 def stage_factor(line, env, t, q, c) -> HermiteStageFactor:
     """The factored stage matrix I − c·J of ``line`` at its packed state q (2n, 6)
-    and time t [s], c = γ·h [s]."""
+    and time t [s], c = γ·h [s]: exact for an element-local closure, else that of
+    the closure's ``stage_closure``."""
     n = line.n_segments
-    u, ud = _nodes(line, t, q)
     a = lax.stop_gradient(dynamics(line, env, t, q)[0]).reshape(-1, 1)
+    closure = line.element.tension.stage_closure()
+    if closure is not line.element.tension:
+        line = eqx.tree_at(lambda ln: ln.element.tension, line, closure,
+                           is_leaf=lambda x: x is line.element.tension)
+    u, ud = _nodes(line, t, q)
 
     def residual(du, dud):  # g − M·a at fixed a: its derivative is M·∂(dv/dt)
         f, me, _, _ = forces_and_mass(line, env, t, u + du, ud + dud)
