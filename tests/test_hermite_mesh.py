@@ -302,3 +302,36 @@ def test_hermite_lines_piled_on_the_bed_are_warned_about():
         solve_line_statics(line(1500.0, HermiteElement()), env, throw=False)
     piled = [w for w in seen if issubclass(w.category, PiledLineWarning)]
     assert len(piled) == 1 and "1350 m" in str(piled[0].message) and "linear element" in str(piled[0].message)
+
+
+
+def test_ensembles_name_their_members_with_piled_hermite_lines():
+    """An ensemble's members are checked before the batched statics (which run
+    under ``vmap``, where a line's own check is skipped): one warning per line
+    naming the members whose Hermite line is piled on the bed (longer than its
+    1350 m path), none for the others."""
+    import warnings
+
+    import moorjax as mj
+    from moorjax.element import HermiteElement
+    from moorjax.ensemble.run import _check_members
+    from moorjax.examples import example_path
+    from moorjax.io import build_scene, read_deck
+    from moorjax.statics.hermite import PiledLineWarning
+
+    base = build_scene(read_deck(example_path("oc3_catenary")), segments=10)
+    lt, env = base.lines[0].line_type, base.env
+
+    def member(length, element=HermiteElement()):
+        line = mj.Line(lt, length, 10, mj.FixedEnd([-1100.0, 0.0, -320.0]),
+                       mj.FixedEnd([0.0, 0.0, -70.0]), element=element)
+        return mj.Scene([line], env)
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        _check_members([member(1300.0), member(1400.0), member(1340.0), member(1500.0)], 0.0)
+        _check_members([member(1300.0), member(1500.0, None)], 0.0)  # the linear element follows it
+    piled = [str(w.message) for w in seen if issubclass(w.category, PiledLineWarning)]
+    assert len(piled) == 1, piled
+    assert "2 of 4 ensemble members [1, 3]" in piled[0] and "150 m" in piled[0]
+    assert "linear element" in piled[0]

@@ -73,11 +73,11 @@ def check_geometry(scene, t0=0.0):
     """Refuse impossible geometry before anything runs: ``ValueError`` naming the
     line whose end is below the seabed or that cannot reach its ends (bodies at
     η = 0). Skipped for traced values."""
-    for line in _lines_at_rest(scene):
+    for line in lines_at_rest(scene):
         fem.check_geometry(line, scene.env, t0)
 
 
-def _lines_at_rest(scene):
+def lines_at_rest(scene):
     """The scene's lines with their fairleads where the bodies are at η = 0, at rest."""
     if not scene.bodies:
         return scene.lines
@@ -183,7 +183,7 @@ def catenary_state(scene, t0=0.0) -> Equilibrium:
     """
     check_geometry(scene, t0)
     states, oks = [], []
-    for line in _lines_at_rest(scene):
+    for line in lines_at_rest(scene):
         st = solve_line_statics(line, scene.env, t0, throw=False)
         state, straight, ok = st.state(), line.straight_state(t0), st.converged
         if jax.tree_util.tree_structure(state) == jax.tree_util.tree_structure(straight):

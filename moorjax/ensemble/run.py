@@ -43,7 +43,8 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from .._cache import StoredProgram
-from ..dynamics.initial import check_geometry, equilibrium_state, resolution_offsets, start_layout
+from ..dynamics.initial import (check_geometry, equilibrium_state, lines_at_rest, resolution_offsets,
+                               start_layout)
 from ..dynamics.integrate import (SUCCESS_CODE, SimulationResult, integrate, result_codes,
                                   result_names, storable_run)
 from ..dynamics.settings import plan
@@ -195,11 +196,29 @@ def _pool_may_starve(scene, settings, n_devices) -> bool:
 
 
 def _check_members(scenes, t0):
+    """Each member's geometry (a ``ValueError`` naming the first bad one), then one
+    :class:`~moorjax.statics.hermite.PiledLineWarning` per Hermite line piled on
+    the bed in some members (bodies at rest), naming them."""
+    from ..statics.hermite import PILED_ADVICE, PiledLineWarning, piled_path
+
+    piled = {}
     for i, s in enumerate(scenes):
         try:
             check_geometry(s, t0)
         except ValueError as exc:
             raise ValueError(f"ensemble member {i}: {exc}") from None
+        for j, line in enumerate(lines_at_rest(s)):
+            found = piled_path(line, s.env, t0)
+            if found is not None:
+                piled.setdefault(j, []).append((i, found[0] - found[1]))
+    for j, members in piled.items():
+        bad = [i for i, _ in members]
+        shown = bad if len(bad) <= 20 else bad[:20] + ["..."]
+        warnings.warn(
+            f"line {scenes[0].lines[j].label}: in {len(bad)} of {len(scenes)} ensemble members {shown} "
+            f"its unstretched length exceeds its path along the seabed (by up to "
+            f"{max(e for _, e in members):.4g} m: the horizontal distance of its ends plus their heights "
+            f"above the bed, bodies at rest), so {PILED_ADVICE}", PiledLineWarning, stacklevel=3)
 
 
 def _shard(tree, spec):

@@ -706,27 +706,40 @@ def check_piled(line: Line, env, t=0.0) -> bool:
     ``jit``/``vmap``), flat seabeds only."""
     import warnings
 
+    found = piled_path(line, env, t)
+    if found is None:
+        return False
+    length, path = found
+    warnings.warn(
+        f"line {line.label}: its unstretched length {length:.6g} m exceeds its path along the seabed "
+        f"({path:.6g} m: the horizontal distance of its ends plus their heights above the bed), so "
+        f"{PILED_ADVICE}", PiledLineWarning, stacklevel=3)
+    return True
+
+
+#: what a piled Hermite line's warning says after its numbers
+PILED_ADVICE = ("part of it lies piled on the bed with no horizontal tension and hangs to it at a "
+                "corner, which Hermite elements (C¹ cubics) cannot represent: its end tensions are "
+                "unreliable and its statics may not converge. Use the linear element for this line "
+                "(--element linear).")
+
+
+def piled_path(line: Line, env, t=0.0):
+    """``(length, path)`` [m] where a Hermite line's unstretched length exceeds its
+    path along a flat seabed (:func:`check_piled`), else ``None``; values only
+    (``None`` under ``jit``/``vmap``)."""
     from ..element.hermite import HermiteElement
     from .fem import concrete_geometry
 
     if (env.seabed is None or getattr(env.seabed, "bathymetry", None) is not None
             or not isinstance(line.element, HermiteElement)):
-        return False
+        return None
     geometry = concrete_geometry(line, env, t)
     if geometry is None:
-        return False
+        return None
     ra, rb, length, depth = geometry
     path = float(np.linalg.norm(rb[:2] - ra[:2]) + (ra[2] + depth) + (rb[2] + depth))
-    if length <= path:
-        return False
-    warnings.warn(
-        f"line {line.label}: its unstretched length {length:.6g} m exceeds its path along the seabed "
-        f"({path:.6g} m: the horizontal distance of its ends plus their heights above the bed), so part "
-        "of it lies piled on the bed with no horizontal tension and hangs to it at a corner, which "
-        "Hermite elements (C¹ cubics) cannot represent: its end tensions are unreliable and its "
-        "statics may not converge. Use the linear element for this line (--element linear).",
-        PiledLineWarning, stacklevel=3)
-    return True
+    return (float(length), path) if length > path else None
 
 
 def check_resolution(line: Line, env, st, t=0.0) -> float | None:
