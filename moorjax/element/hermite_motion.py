@@ -231,7 +231,7 @@ class ProjectedTension(AbstractTension):
     lengths scaled together along the whole line).
 
     The continuous field couples the line (Π solves Wu's field's Gram matrix,
-    block-tridiagonal, O(n)); the implicit stages' Newton iteration uses the
+    block-tridiagonal, O(n), without LAPACK); the implicit stages' Newton iteration uses the
     per-element field's block-tridiagonal matrix for it (:meth:`stage_closure`),
     which is exact where the two agree (a straight taut line) and near it
     elsewhere: case A at 10 elements runs in 0.70–0.75 s (20 s simulated), against
@@ -269,16 +269,20 @@ class ProjectedTension(AbstractTension):
 
 
 def field_gram(line) -> btd.BlockTridiagonalLU:
-    """Wu's field's Gram matrix ∫ P_m P_k ds, factored: 2×2 blocks, block k holding
-    the values at node k and at the midpoint of element k (the last block node
-    n's and a unit placeholder)."""
+    """Wu's field's Gram matrix ∫ P_m P_k ds, factored: block k holds the values at
+    node k and at the midpoint of element k (the last block node n's), padded to
+    3×3 with a unit placeholder so that the pivots invert by cofactors
+    (:func:`~moorjax.linalg.block_tridiagonal.factor3`: no LAPACK call, which
+    batched beside the stages' factorisations would break their one-at-a-time
+    ordering, ``tests/test_lapack_ordering.py``)."""
     n = line.n_segments
     ge = jnp.einsum("mq,kq,nq->nmk", P, P, quadrature_weights(line))  # (n, 3, 3)
-    z = jnp.zeros((n + 1, 2, 2), ge.dtype)
-    diag = z.at[:n].add(ge[:, :2, :2]).at[1:, 0, 0].add(ge[:, 2, 2]).at[n, 1, 1].set(1.0)
-    upper = z.at[:n, :, 0].set(ge[:, :2, 2])
-    lower = z.at[1:, 0, :].set(ge[:, 2, :2])
-    return btd.factor(lower, diag, upper)
+    z = jnp.zeros((n + 1, 3, 3), ge.dtype)
+    diag = (z.at[:n, :2, :2].add(ge[:, :2, :2]).at[1:, 0, 0].add(ge[:, 2, 2])
+            .at[:, 2, 2].set(1.0).at[n, 1, 1].set(1.0))
+    upper = z.at[:n, :2, 0].set(ge[:, :2, 2])
+    lower = z.at[1:, 0, :2].set(ge[:, 2, :2])
+    return btd.factor3(lower, diag, upper)
 
 
 def field_projection(line, gram, f):
@@ -287,9 +291,9 @@ def field_projection(line, gram, f):
     :func:`field_gram`."""
     n = line.n_segments
     be = jnp.einsum("mq,nq,nq->nm", P, quadrature_weights(line), f)  # (n, 3)
-    rhs = jnp.zeros((n + 1, 2), be.dtype).at[:n].add(be[:, :2]).at[1:, 0].add(be[:, 2])
+    rhs = jnp.zeros((n + 1, 3), be.dtype).at[:n, :2].add(be[:, :2]).at[1:, 0].add(be[:, 2])
     x = btd.solve(gram, rhs)
-    values = jnp.concatenate([x[:n], x[1:, :1]], axis=1)  # (n, 3): node, midpoint, next node
+    values = jnp.concatenate([x[:n, :2], x[1:, :1]], axis=1)  # (n, 3): node, midpoint, next node
     return jnp.einsum("mq,nm->nq", P, values)
 
 
